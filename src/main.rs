@@ -1,0 +1,2 @@
+//! The `localisebot` command line.
+fn main() {}

@@ -1,0 +1,163 @@
+//! Triangle meshes in the model frame: positions and triangles, nothing else
+//! (a silhouette needs no normals, UVs or materials).
+
+use glam::DVec3;
+
+/// A triangle mesh, model frame, node transforms already applied.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub positions: Vec<DVec3>,
+    /// Triangles as indices into `positions` (counter-clockwise seen from outside,
+    /// where the source says so; the silhouette does not depend on winding).
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// An axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds {
+    /// Smallest corner.
+    pub min: DVec3,
+    /// Largest corner.
+    pub max: DVec3,
+}
+
+impl Bounds {
+    /// Centre of the box.
+    pub fn centre(&self) -> DVec3 {
+        (self.min + self.max) * 0.5
+    }
+    /// Side lengths.
+    pub fn size(&self) -> DVec3 {
+        self.max - self.min
+    }
+}
+
+impl Mesh {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Bounds of all vertices (`None` for an empty mesh).
+    pub fn bounds(&self) -> Option<Bounds> {
+        let first = *self.positions.first()?;
+        let (min, max) = self
+            .positions
+            .iter()
+            .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        Some(Bounds { min, max })
+    }
+
+    /// The vertices used by at least one triangle.
+    pub fn used_points(&self) -> Vec<DVec3> {
+        let mut used = vec![false; self.positions.len()];
+        for t in &self.triangles {
+            for &i in t {
+                used[i as usize] = true;
+            }
+        }
+        self.positions
+            .iter()
+            .zip(used)
+            .filter_map(|(p, u)| u.then_some(*p))
+            .collect()
+    }
+
+    /// The object's diameter: the largest distance between two vertices.
+    /// Exact over the convex-hull candidates for small meshes; for large ones, the
+    /// largest distance among extreme points along 13 directions (within about 1 %).
+    pub fn diameter(&self) -> f64 {
+        let pts = self.used_points();
+        if pts.len() <= 3000 {
+            let mut best = 0.0f64;
+            for (i, a) in pts.iter().enumerate() {
+                for b in &pts[i + 1..] {
+                    best = best.max(a.distance_squared(*b));
+                }
+            }
+            return best.sqrt();
+        }
+        let dirs = [
+            DVec3::X,
+            DVec3::Y,
+            DVec3::Z,
+            DVec3::new(1., 1., 0.),
+            DVec3::new(1., -1., 0.),
+            DVec3::new(1., 0., 1.),
+            DVec3::new(1., 0., -1.),
+            DVec3::new(0., 1., 1.),
+            DVec3::new(0., 1., -1.),
+            DVec3::new(1., 1., 1.),
+            DVec3::new(1., 1., -1.),
+            DVec3::new(1., -1., 1.),
+            DVec3::new(-1., 1., 1.),
+        ];
+        let mut ext = Vec::new();
+        for d in dirs {
+            let lo = pts.iter().min_by(|a, b| a.dot(d).total_cmp(&b.dot(d))).unwrap();
+            let hi = pts.iter().max_by(|a, b| a.dot(d).total_cmp(&b.dot(d))).unwrap();
+            ext.push(*lo);
+            ext.push(*hi);
+        }
+        let mut best = 0.0f64;
+        for e in &ext {
+            for p in &pts {
+                best = best.max(e.distance_squared(*p));
+            }
+        }
+        best.sqrt()
+    }
+
+    /// Checks indices are in range and positions finite; `file` names the mesh in errors.
+    pub fn validate(&self, file: &str) -> crate::Result<()> {
+        let err = |p: String| crate::Error::Mesh {
+            file: file.into(),
+            problem: p,
+        };
+        if self.triangles.is_empty() {
+            return Err(err("contains no triangles".into()));
+        }
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(err(format!("vertex {i} has a non-finite coordinate")));
+        }
+        let n = self.positions.len() as u32;
+        if let Some(t) = self.triangles.iter().find(|t| t.iter().any(|&i| i >= n)) {
+            return Err(err(format!(
+                "triangle {t:?} refers to a vertex beyond the {n} vertices"
+            )));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounds_and_diameter_of_a_cube_corner_set() {
+        let m = Mesh {
+            positions: vec![
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::Y,
+                DVec3::new(1., 1., 1.),
+                DVec3::splat(9.),
+            ],
+            triangles: vec![[0, 1, 2], [1, 2, 3]],
+        };
+        let b = m.bounds().unwrap();
+        assert_eq!(b.max, DVec3::splat(9.));
+        assert!(
+            (m.diameter() - 3f64.sqrt()).abs() < 1e-12,
+            "unused vertex 4 must not count"
+        );
+        assert!(m.validate("m").is_ok());
+        let bad = Mesh {
+            positions: vec![DVec3::ZERO],
+            triangles: vec![[0, 0, 5]],
+        };
+        assert!(bad.validate("m.obj").unwrap_err().to_string().contains("beyond"));
+    }
+}

@@ -1,0 +1,1 @@
+//! Pose errors and silhouette figures (SPEC §6). (Being written.)

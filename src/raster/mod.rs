@@ -1,0 +1,6 @@
+//! Rasterisation: projection of the posed mesh, hard (binary) silhouettes and
+//! soft (SoftRas) silhouettes with their analytic backward pass.
+
+pub mod hard;
+pub mod project;
+pub mod soft;
