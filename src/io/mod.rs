@@ -3,9 +3,12 @@
 //! refers to are asked for through a resolver closure, `&dyn Fn(&str) -> Option<Vec<u8>>`,
 //! given the path as written relative to the scene (or mesh) file.
 
+pub mod bop;
 pub mod gltf;
 pub mod mask;
+pub mod nerf;
 pub mod obj;
+pub mod ply;
 pub mod png;
 pub mod scene;
 
