@@ -20,21 +20,28 @@
 
 pub mod camera;
 pub mod error;
+pub mod estimator;
 pub mod io;
 pub mod loss;
 pub mod mask;
 pub mod mesh;
+pub mod optim;
 pub mod metrics;
 pub mod overlay;
 pub mod pose;
 pub mod raster;
+pub mod refine;
+pub mod result;
 pub mod so3;
+pub mod synth;
 pub mod view;
 
 pub use camera::{Camera, CameraJson, Convention};
 pub use error::{Error, Result};
+pub use estimator::{Estimator, FitSettings, Phase, Progress, ScaleMode, Termination};
 pub use io::scene::{load_scene, Scene, SceneJson, ViewJson};
 pub use mask::Mask;
 pub use mesh::{Bounds, Mesh};
 pub use pose::{Pose, PoseJson};
+pub use result::FitResult;
 pub use view::{Rgba, View};

@@ -58,8 +58,8 @@ pub fn join(dir: &str, rel: &str) -> String {
     }
 }
 
-/// Loads a mesh from its bytes, choosing the format by content (GLB magic, JSON) or
-/// extension (`.obj`). `extra` supplies files the mesh refers to (a `.gltf`'s `.bin`
+/// Loads a mesh from its bytes, choosing the format by content (GLB magic, JSON, `ply`
+/// magic) or extension (`.obj`, `.ply`). `extra` supplies files the mesh refers to (a `.gltf`'s `.bin`
 /// buffers), by URI relative to the mesh file.
 pub fn load_mesh(file: &str, bytes: &[u8], extra: Resolver) -> Result<Mesh> {
     let lower = file.to_ascii_lowercase();
@@ -67,6 +67,8 @@ pub fn load_mesh(file: &str, bytes: &[u8], extra: Resolver) -> Result<Mesh> {
         gltf::load(file, bytes, extra)?
     } else if lower.ends_with(".obj") {
         obj::load(file, bytes)?
+    } else if lower.ends_with(".ply") || bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
+        ply::load(file, bytes)?
     } else {
         let head = bytes.iter().find(|b| !b.is_ascii_whitespace());
         if head == Some(&b'{') {
@@ -74,7 +76,7 @@ pub fn load_mesh(file: &str, bytes: &[u8], extra: Resolver) -> Result<Mesh> {
         } else {
             return Err(Error::Mesh {
                 file: file.into(),
-                problem: "unknown mesh format: expected .glb, .gltf or .obj".into(),
+                problem: "unknown mesh format: expected .glb, .gltf, .obj or .ply".into(),
             });
         }
     };

@@ -4,3 +4,4 @@
 pub mod contour;
 pub mod edt;
 pub mod iou;
+pub mod objective;

@@ -3,4 +3,6 @@
 
 pub mod hard;
 pub mod project;
+pub mod shade;
 pub mod soft;
+pub mod soft_backward;

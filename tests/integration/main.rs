@@ -1,4 +1,5 @@
 //! Native integration tests: one binary, one module per area (as tiny-skia does).
+#![cfg(not(target_arch = "wasm32"))]
 
 mod cli;
 mod estimator;

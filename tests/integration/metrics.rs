@@ -1,1 +1,197 @@
-//! (Being written.)
+//! SPEC §6 figures on known answers: rotation, translation and scale errors, ADD and
+//! ADD-S (against a brute-force nearest neighbour), hard IoU, contour distances and
+//! the empty-mask cases.
+
+use crate::hard_raster::{cube, duck, random_pose};
+use glam::{DMat3, DVec3};
+use localisebot::metrics::{self, PoseErrors};
+use localisebot::{so3, Mask, Pose};
+use rand::rngs::SmallRng;
+use rand::SeedableRng;
+
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol
+}
+
+#[test]
+fn rotation_translation_and_scale_errors() {
+    let mut rng = SmallRng::seed_from_u64(11);
+    let gt = random_pose(&mut rng, &cube());
+    let axis = DVec3::new(0.3, -0.5, 0.8).normalize();
+    for deg in [10.0f64, 1.0, 90.0, 179.0] {
+        let est = Pose {
+            rotation: gt.rotation * so3::exp(axis * deg.to_radians()),
+            ..gt
+        };
+        let e = metrics::rotation_error_deg(&est, &gt);
+        assert!(close(e, deg, 1e-5), "{deg}° gave {e}");
+        assert!(close(metrics::rotation_error_deg(&gt, &est), deg, 1e-5));
+    }
+    let est = Pose {
+        translation: gt.translation + DVec3::new(3.0, -4.0, 0.0),
+        scale: gt.scale * DVec3::new(1.1, 0.85, 1.0),
+        ..gt
+    };
+    assert!(close(metrics::translation_error(&est, &gt), 5.0, 1e-12));
+    assert!(close(metrics::scale_error(&est, &gt), 0.15, 1e-12));
+    assert!(close(metrics::scale_error_mean(&est, &gt), 0.25 / 3.0, 1e-12));
+}
+
+#[test]
+fn add_of_a_pure_translation_is_its_length() {
+    let mesh = duck();
+    let mut rng = SmallRng::seed_from_u64(12);
+    let gt = random_pose(&mut rng, &mesh);
+    let d = DVec3::new(0.02, -0.03, 0.06);
+    let est = Pose {
+        translation: gt.translation + d,
+        ..gt
+    };
+    assert!(close(metrics::add(&mesh, &est, &gt), d.length(), 1e-12));
+    assert!(metrics::add_s(&mesh, &est, &gt) <= d.length() + 1e-12);
+    assert_eq!(metrics::add(&mesh, &gt, &gt), 0.0);
+    assert_eq!(metrics::add_s(&mesh, &gt, &gt), 0.0);
+}
+
+#[test]
+fn add_s_forgives_a_symmetry_that_add_does_not() {
+    // The cube [-1, 1]³ turned 90° about z maps its corners onto each other; each
+    // corner moves by |(x, y) − (−y, x)| = √2·√2 = 2.
+    let mesh = cube();
+    let gt = Pose::IDENTITY;
+    let est = Pose {
+        rotation: DMat3::from_rotation_z(std::f64::consts::FRAC_PI_2),
+        ..gt
+    };
+    assert!(close(metrics::add(&mesh, &est, &gt), 2.0, 1e-12));
+    assert!(metrics::add_s(&mesh, &est, &gt) < 1e-12);
+    let e: PoseErrors = metrics::pose_errors(&mesh, &est, &gt);
+    assert!(close(e.rotation_deg, 90.0, 1e-9));
+    assert!(close(e.diameter, 12f64.sqrt(), 1e-12));
+    assert!(close(e.add_rel, 2.0 / 12f64.sqrt(), 1e-12) && e.add_s_rel < 1e-12);
+    let json = serde_json::to_value(e).unwrap();
+    for key in [
+        "rotation_deg",
+        "translation",
+        "scale",
+        "scale_mean",
+        "add",
+        "add_s",
+        "diameter",
+        "add_rel",
+        "add_s_rel",
+    ] {
+        assert!(json.get(key).is_some(), "missing {key} in {json}");
+    }
+}
+
+#[test]
+fn add_s_agrees_with_brute_force_on_the_duck() {
+    let mesh = duck();
+    let mut rng = SmallRng::seed_from_u64(13);
+    for _ in 0..2 {
+        let gt = random_pose(&mut rng, &mesh);
+        let est = random_pose(&mut rng, &mesh);
+        let pts = mesh.used_points();
+        let posed: Vec<DVec3> = pts.iter().map(|&p| est.apply(p)).collect();
+        let brute = pts
+            .iter()
+            .map(|&p| {
+                let g = gt.apply(p);
+                posed.iter().map(|q| q.distance(g)).fold(f64::INFINITY, f64::min)
+            })
+            .sum::<f64>()
+            / pts.len() as f64;
+        let fast = metrics::add_s(&mesh, &est, &gt);
+        assert!(close(fast, brute, 1e-12), "k-d tree {fast} vs brute force {brute}");
+        assert!(fast > 0.0 && fast < metrics::add(&mesh, &est, &gt));
+        // The diameter is measured under the true pose, scale included.
+        let e = metrics::pose_errors(&mesh, &est, &gt);
+        let scaled = localisebot::Mesh {
+            positions: mesh.positions.iter().map(|&p| gt.scale * p).collect(),
+            triangles: mesh.triangles.clone(),
+        };
+        assert!(close(e.diameter, scaled.diameter(), 1e-9));
+        assert!(close(e.add_s_rel * e.diameter, fast, 1e-12));
+    }
+}
+
+fn rect(w: u32, h: u32, x0: u32, y0: u32, x1: u32, y1: u32) -> Mask {
+    let mut m = Mask::empty(w, h);
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            m.data[(y * w + x) as usize] = 1;
+        }
+    }
+    m
+}
+
+fn disc(w: u32, h: u32, cx: f64, cy: f64, r: f64) -> Mask {
+    let mut m = Mask::empty(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            m.data[(y * w + x) as usize] = ((x as f64 - cx).powi(2) + (y as f64 - cy).powi(2) <= r * r) as u8;
+        }
+    }
+    m
+}
+
+#[test]
+fn iou_of_two_rectangles() {
+    let a = rect(30, 30, 0, 0, 9, 9);
+    let b = rect(30, 30, 5, 5, 14, 14);
+    assert!(close(metrics::hard_iou(&a, &b), 25.0 / 175.0, 1e-15));
+    assert_eq!(metrics::hard_iou(&a, &a), 1.0);
+    assert_eq!(metrics::hard_iou(&a, &rect(30, 30, 20, 20, 25, 25)), 0.0);
+}
+
+#[test]
+fn contour_is_the_object_border() {
+    let m = rect(7, 6, 1, 1, 3, 3);
+    let c = metrics::contour(&m);
+    let on: Vec<(u32, u32)> = (0..42)
+        .filter(|&i| c.data[i] == 1)
+        .map(|i| (i as u32 % 7, i as u32 / 7))
+        .collect();
+    assert_eq!(on, vec![(1, 1), (2, 1), (3, 1), (1, 2), (3, 2), (1, 3), (2, 3), (3, 3)]);
+    // Object pixels on the image border are contour pixels.
+    let full = rect(4, 3, 0, 0, 3, 2);
+    assert_eq!(metrics::contour(&full).area(), 10);
+}
+
+#[test]
+fn hausdorff_of_offset_shapes_is_the_offset() {
+    let a = rect(40, 30, 5, 5, 14, 14);
+    let b = rect(40, 30, 8, 5, 17, 14);
+    assert_eq!(metrics::hausdorff_px(&a, &b), 3.0);
+    assert_eq!(metrics::hausdorff_px(&b, &a), 3.0);
+    for d in [1.0, 4.0, 7.0] {
+        let a = disc(64, 48, 20.0, 22.0, 10.0);
+        let b = disc(64, 48, 20.0 + d, 22.0, 10.0);
+        assert_eq!(metrics::hausdorff_px(&a, &b), d);
+        let c = metrics::contour_distance(&a, &b);
+        assert!(c.mean > 0.0 && c.mean < d, "mean {}", c.mean);
+    }
+    // A square ring of side 11 inside one of side 15: A's pixels are all 2 away;
+    // B's are 2 (44), √5 (8, next to the corners) or 2√2 (4 corners) away.
+    let a = rect(30, 30, 10, 10, 20, 20);
+    let b = rect(30, 30, 8, 8, 22, 22);
+    let c = metrics::contour_distance(&a, &b);
+    assert!(close(c.hausdorff, 8f64.sqrt(), 1e-12));
+    let want = (40.0 * 2.0 + 44.0 * 2.0 + 8.0 * 5f64.sqrt() + 4.0 * 8f64.sqrt()) / 96.0;
+    assert!(close(c.mean, want, 1e-12), "{} vs {want}", c.mean);
+    assert_eq!(metrics::contour_distance(&a, &a).hausdorff, 0.0);
+    assert_eq!(metrics::mean_contour_distance_px(&a, &a), 0.0);
+}
+
+#[test]
+fn empty_masks_have_defined_figures() {
+    let e = Mask::empty(20, 10);
+    let a = rect(20, 10, 2, 2, 5, 5);
+    assert_eq!(metrics::hard_iou(&e, &e), 0.0);
+    assert_eq!(metrics::hard_iou(&e, &a), 0.0);
+    assert_eq!(metrics::hausdorff_px(&e, &e), 0.0);
+    assert_eq!(metrics::hausdorff_px(&e, &a), 30.0);
+    assert_eq!(metrics::hausdorff_px(&a, &e), 30.0);
+    assert_eq!(metrics::mean_contour_distance_px(&a, &e), 30.0);
+}

@@ -1,0 +1,61 @@
+//! Command-line parsing (clap) and dispatch. Each command lives in its own file;
+//! every error reaches the user as one line on stderr and a non-zero exit status.
+
+mod files;
+mod fit;
+mod info;
+mod render;
+mod synth;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+/// Multi-view 9-DoF object localisation by differentiable silhouette rendering.
+#[derive(Parser)]
+#[command(name = "localisebot", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print a mesh's vertex and triangle counts and bounds (after node transforms) as JSON.
+    Info {
+        /// Mesh file (.glb, .gltf, .obj, .ply).
+        mesh: PathBuf,
+    },
+    /// Make a synthetic scene: cameras around the mesh, masks rendered at a (random) pose.
+    Synth(synth::SynthArgs),
+    /// Estimate the object's pose in a scene (search, then refine); write the result JSON.
+    Fit(fit::FitArgs),
+    /// Draw overlays (mask outline and rendered contour over each view) for a pose.
+    Render {
+        /// The scene file.
+        scene: PathBuf,
+        /// The pose file (SPEC §3 pose form, or a result file with a "pose" key).
+        #[arg(long)]
+        pose: PathBuf,
+        /// Output folder for one PNG per view.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+/// Runs the command line; returns the process exit status.
+pub fn main() -> i32 {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Info { mesh } => info::run(&mesh),
+        Command::Synth(args) => synth::run(&args),
+        Command::Fit(args) => fit::run(&args),
+        Command::Render { scene, pose, out } => render::run(&scene, &pose, &out),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            1
+        }
+    }
+}

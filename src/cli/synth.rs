@@ -1,0 +1,99 @@
+//! `localisebot synth`: a synthetic scene folder from a mesh — `scene.json` with its
+//! `ground_truth_pose`, `masks/*.png` and a copy of the mesh (with its `.bin` buffers).
+
+use super::files::{load_mesh, load_pose, read, write, CliResult};
+use clap::Args;
+use localisebot::io::png::{encode_gray, encode_rgba};
+use localisebot::synth::{synthesize, SynthSettings};
+use localisebot::{CameraJson, PoseJson, SceneJson, ViewJson};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `synth`.
+#[derive(Args)]
+pub struct SynthArgs {
+    /// Mesh file (.glb, .gltf, .obj, .ply).
+    #[arg(long)]
+    mesh: PathBuf,
+    /// Number of views.
+    #[arg(long, default_value_t = 4)]
+    views: usize,
+    /// Random seed (pose and cameras).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 256)]
+    width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 256)]
+    height: u32,
+    /// Pose file to render at, instead of a random pose.
+    #[arg(long)]
+    pose: Option<PathBuf>,
+    /// Also write shaded renders as the views' images.
+    #[arg(long)]
+    images: bool,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// Runs `synth`.
+pub fn run(a: &SynthArgs) -> CliResult {
+    let mesh = load_mesh(&a.mesh)?;
+    let pose = a.pose.as_deref().map(load_pose).transpose()?;
+    let settings = SynthSettings { views: a.views, width: a.width, height: a.height, seed: a.seed, images: a.images, ..Default::default() };
+    let scene = synthesize(&mesh, &settings, pose).map_err(|e| e.to_string())?;
+    let mesh_name = copy_mesh(&a.mesh, &a.out)?;
+    let mut views = Vec::new();
+    for (i, (cam, mask)) in scene.cameras.iter().zip(&scene.masks).enumerate() {
+        let name = format!("view{i}");
+        let rel = format!("masks/{name}.png");
+        let grey: Vec<u8> = mask.data.iter().map(|&v| v * 255).collect();
+        write(&a.out.join(&rel), &encode_gray(mask.width, mask.height, &grey))?;
+        let image = match scene.images.get(i) {
+            Some(img) => {
+                let rel = format!("images/{name}.png");
+                write(&a.out.join(&rel), &encode_rgba(img))?;
+                Some(rel)
+            }
+            None => None,
+        };
+        views.push(ViewJson { name, image, mask: rel, camera: CameraJson::from_camera(cam) });
+    }
+    let json = SceneJson {
+        version: 1,
+        mesh: mesh_name,
+        views,
+        initial_pose: None,
+        ground_truth_pose: Some(PoseJson::from_pose(&scene.pose)),
+        grasps: vec![],
+    };
+    write(&a.out.join("scene.json"), json.to_json_string().as_bytes())?;
+    eprintln!("wrote {} ({} views)", a.out.join("scene.json").display(), scene.cameras.len());
+    Ok(())
+}
+
+/// Copies the mesh file, and a `.gltf`'s external buffers and images, into `out`.
+/// Returns the mesh's name relative to `out`.
+fn copy_mesh(mesh: &Path, out: &Path) -> CliResult<String> {
+    let name = mesh.file_name().ok_or_else(|| format!("{}: not a file", mesh.display()))?.to_string_lossy().to_string();
+    let bytes = read(mesh)?;
+    write(&out.join(&name), &bytes)?;
+    if name.to_ascii_lowercase().ends_with(".gltf") {
+        let dir = mesh.parent().unwrap_or(Path::new(""));
+        let v: serde_json::Value = serde_json::from_slice(&bytes).map_err(|e| format!("{}: {e}", mesh.display()))?;
+        let uris = ["buffers", "images"]
+            .iter()
+            .filter_map(|k| v.get(*k).and_then(|a| a.as_array()))
+            .flatten()
+            .filter_map(|b| b.get("uri").and_then(|u| u.as_str()))
+            .filter(|u| !u.starts_with("data:"));
+        for uri in uris {
+            // Images are optional for a silhouette; buffers must be there.
+            if let Ok(b) = std::fs::read(dir.join(uri)) {
+                write(&out.join(uri), &b)?;
+            }
+        }
+    }
+    Ok(name)
+}

@@ -1,0 +1,133 @@
+//! Exact coverage of one triangle, row by row, in fixed point.
+//!
+//! Input: three vertices in pixel coordinates already snapped to 1/2^[`SUBPIXEL_BITS`]
+//! px (`i64`, within the guard band of [`GUARD_BAND_PX`]); output: for every canvas
+//! row the triangle touches, the inclusive run of pixel columns whose centres it
+//! covers. The edge functions are integers, so the inside test is exact; a centre
+//! exactly on an edge belongs to the triangle only if that edge is a top or left
+//! edge (the Direct3D / OpenGL top-left rule). Each row's run is solved from the
+//! three edge functions by exact integer division instead of testing every pixel.
+
+/// Fractional bits of the fixed-point vertex coordinates (vertices snap to 1/1024 px).
+pub const SUBPIXEL_BITS: u32 = 10;
+
+/// Vertices farther than this from the image origin (pixels, either axis) are
+/// clipped away in the image plane before snapping, which keeps every edge
+/// function within `i64` (|coordinate| ≤ 2^28 units, products ≤ 2^59).
+pub const GUARD_BAND_PX: f64 = (1u64 << 18) as f64;
+
+const ONE: i64 = 1 << SUBPIXEL_BITS;
+
+/// Snaps a pixel coordinate (|v| ≤ [`GUARD_BAND_PX`]) to fixed point: `round(v · 2^SUBPIXEL_BITS)`.
+#[inline]
+pub fn snap(v: f64) -> i64 {
+    (v * ONE as f64).round() as i64
+}
+
+/// Smallest integer ≥ a / b for a > 0, b > 0.
+#[inline]
+fn ceil_div_pos(a: i64, b: i64) -> i64 {
+    (a + b - 1) / b
+}
+
+/// Calls `span(y, x0, x1)` (inclusive columns) for every row of the `width`×`height`
+/// canvas in which the triangle `v` (snapped, any winding) covers a pixel centre.
+/// Degenerate (zero-area) triangles cover nothing.
+#[inline]
+pub fn triangle_spans(mut v: [[i64; 2]; 3], width: u32, height: u32, span: &mut impl FnMut(usize, usize, usize)) {
+    let area = (v[1][0] - v[0][0]) * (v[2][1] - v[0][1]) - (v[1][1] - v[0][1]) * (v[2][0] - v[0][0]);
+    if area == 0 {
+        return;
+    }
+    if area < 0 {
+        v.swap(1, 2);
+    }
+    // Pixel bounds: centres k·ONE inside [min, max], clamped to the canvas.
+    let (mut min_x, mut max_x, mut min_y, mut max_y) = (v[0][0], v[0][0], v[0][1], v[0][1]);
+    for p in &v[1..] {
+        min_x = min_x.min(p[0]);
+        max_x = max_x.max(p[0]);
+        min_y = min_y.min(p[1]);
+        max_y = max_y.max(p[1]);
+    }
+    let x_lo = (-((-min_x) >> SUBPIXEL_BITS)).max(0);
+    let x_hi = (max_x >> SUBPIXEL_BITS).min(width as i64 - 1);
+    let y_lo = (-((-min_y) >> SUBPIXEL_BITS)).max(0);
+    let y_hi = (max_y >> SUBPIXEL_BITS).min(height as i64 - 1);
+    if x_lo > x_hi || y_lo > y_hi {
+        return;
+    }
+    // Edge i runs from v[i] to v[i+1]; with positive area the interior is where
+    // E(p) = dx·(py − ay) − dy·(px − ax) > 0. The bias −1 on non-top-left edges
+    // turns "E > 0, or E = 0 on a top-left edge" into "w ≥ 0".
+    let (px, py) = (x_lo * ONE, y_lo * ONE);
+    let mut w = [0i64; 3];
+    let mut step_x = [0i64; 3];
+    let mut step_y = [0i64; 3];
+    for i in 0..3 {
+        let a = v[i];
+        let b = v[(i + 1) % 3];
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let top_left = dy < 0 || (dy == 0 && dx > 0);
+        w[i] = dx * (py - a[1]) - dy * (px - a[0]) - i64::from(!top_left);
+        step_x[i] = -dy * ONE;
+        step_y[i] = dx * ONE;
+    }
+    let last = x_hi - x_lo;
+    for y in y_lo..=y_hi {
+        // Columns k = x − x_lo with w_i + step_x_i · k ≥ 0 for all three edges.
+        let (mut lo, mut hi) = (0i64, last);
+        for i in 0..3 {
+            let (wi, s) = (w[i], step_x[i]);
+            if s > 0 {
+                if wi < 0 {
+                    lo = lo.max(ceil_div_pos(-wi, s));
+                }
+            } else if s < 0 {
+                if wi < 0 {
+                    hi = -1;
+                } else if wi + s * hi < 0 {
+                    hi = hi.min(wi / -s);
+                }
+            } else if wi < 0 {
+                hi = -1;
+            }
+        }
+        if lo <= hi {
+            span(y as usize, (x_lo + lo) as usize, (x_lo + hi) as usize);
+        }
+        for i in 0..3 {
+            w[i] += step_y[i];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn covered(v: [[f64; 2]; 3], w: u32, h: u32) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        let v = v.map(|p| [snap(p[0]), snap(p[1])]);
+        triangle_spans(v, w, h, &mut |y, x0, x1| out.extend((x0..=x1).map(|x| (x, y))));
+        out
+    }
+
+    #[test]
+    fn right_triangle_on_pixel_centres_follows_top_left_rule() {
+        // Legs on x = 0 (left edge: included) and y = 0 (top edge: included); the
+        // hypotenuse x + y = 4 is a bottom-right edge: centres on it are excluded.
+        let got = covered([[0.0, 0.0], [4.0, 0.0], [0.0, 4.0]], 10, 10);
+        let want: Vec<(usize, usize)> = (0..4).flat_map(|y| (0..4 - y).map(move |x| (x, y))).collect();
+        assert_eq!(got, want);
+        // The other winding covers the same centres.
+        assert_eq!(covered([[0.0, 0.0], [0.0, 4.0], [4.0, 0.0]], 10, 10), want);
+    }
+
+    #[test]
+    fn clamps_to_canvas_and_skips_degenerate() {
+        let got = covered([[-5.5, -5.5], [100.0, -5.5], [-5.5, 100.0]], 3, 2);
+        assert_eq!(got, vec![(0, 0), (1, 0), (2, 0), (0, 1), (1, 1), (2, 1)]);
+        assert!(covered([[0.0, 0.0], [2.0, 2.0], [4.0, 4.0]], 10, 10).is_empty());
+    }
+}

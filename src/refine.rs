@@ -1,0 +1,139 @@
+//! One refinement stage's view of the problem (SPEC §4 step 4): the views at the
+//! stage's resolution (cameras scaled, masks resampled, distance transforms of the
+//! masks' contours), and the multi-view loss `mean_views(λ1·IoU + λ2·contour)` with
+//! its 9-gradient through the soft rasteriser's analytic backward pass.
+
+use crate::camera::Camera;
+use crate::loss::contour::ContourTarget;
+use crate::loss::iou;
+use crate::mesh::Mesh;
+use crate::optim::search::fit_size;
+use crate::pose::Pose;
+use crate::raster::hard::{render_bits, BitMask};
+use crate::raster::project::project_mesh;
+use crate::raster::soft::{SoftRasterizer, SoftSettings};
+use crate::view::View;
+
+/// One coarse-to-fine stage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StageSettings {
+    /// Longest image side, pixels (views are never upsampled).
+    pub resolution: u32,
+    /// Soft-silhouette σ at that resolution, pixel².
+    pub sigma: f64,
+    /// Optimiser iterations per candidate.
+    pub iterations: usize,
+    /// Step-size factor at the stage's start…
+    pub lr_start: f64,
+    /// …decaying geometrically to this at its end.
+    pub lr_end: f64,
+    /// Candidates kept for the next stage (the best by hard IoU).
+    pub keep: usize,
+    /// Whether the contour (Hausdorff) term is used in this stage.
+    pub contour: bool,
+}
+
+impl StageSettings {
+    /// The default schedule: wide and coarse first, then sharper and finer, finishing
+    /// near a hard silhouette with the contour term so the soft IoU's bias towards a
+    /// smaller object does not remain in the answer.
+    pub fn default_schedule() -> Vec<StageSettings> {
+        vec![
+            StageSettings { resolution: 64, sigma: 1.0, iterations: 40, lr_start: 1.0, lr_end: 0.3, keep: 2, contour: false },
+            StageSettings { resolution: 128, sigma: 0.5, iterations: 40, lr_start: 0.4, lr_end: 0.1, keep: 1, contour: false },
+            StageSettings { resolution: 256, sigma: 0.1, iterations: 40, lr_start: 0.15, lr_end: 0.02, keep: 1, contour: true },
+        ]
+    }
+}
+
+/// A view prepared for one stage.
+#[derive(Debug, Clone)]
+struct StageView {
+    camera: Camera,
+    mask: Vec<u8>,
+    bits: BitMask,
+    contour: Option<ContourTarget>,
+    raster: SoftRasterizer,
+    d_alpha: Vec<f64>,
+}
+
+/// The stage's views and loss weights.
+#[derive(Debug, Clone)]
+pub struct RefineTarget {
+    views: Vec<StageView>,
+    soft: SoftSettings,
+    lambda_iou: f64,
+    lambda_contour: f64,
+}
+
+impl RefineTarget {
+    /// Prepares `views` for `stage`.
+    pub fn new(views: &[View], stage: &StageSettings, lambda_iou: f64, lambda_contour: f64) -> RefineTarget {
+        let views = views
+            .iter()
+            .map(|v| {
+                let (w, h) = fit_size(v.camera.width, v.camera.height, stage.resolution);
+                let camera = v.camera.scaled(w, h);
+                let mask = v.mask.resample(w, h);
+                // A mask that vanishes at this resolution gets no contour term.
+                let contour = (stage.contour && lambda_contour > 0.0)
+                    .then(|| ContourTarget::new(&mask, &v.name).ok())
+                    .flatten();
+                StageView {
+                    camera,
+                    mask: mask.data.clone(),
+                    bits: BitMask::from_mask(&mask),
+                    contour,
+                    raster: SoftRasterizer::new(),
+                    d_alpha: Vec::new(),
+                }
+            })
+            .collect();
+        RefineTarget {
+            views,
+            soft: SoftSettings { sigma: stage.sigma, eps: 1e-4 },
+            lambda_iou,
+            lambda_contour: if stage.contour { lambda_contour } else { 0.0 },
+        }
+    }
+
+    /// The mean over views of `λ1·IoU + λ2·contour` at `pose`, and its gradient with
+    /// respect to `[ω (right tangent), t, log s]`.
+    pub fn loss_and_gradient(&mut self, mesh: &Mesh, pose: &Pose) -> (f64, [f64; 9]) {
+        let mut total = 0.0;
+        let mut grad = [0.0; 9];
+        for v in &mut self.views {
+            if v.raster.render(mesh, pose, &v.camera, &self.soft).is_err() {
+                return (f64::INFINITY, [0.0; 9]);
+            }
+            let alpha = &v.raster.silhouette().alpha;
+            v.d_alpha.clear();
+            v.d_alpha.resize(alpha.len(), 0.0);
+            let mut loss = self.lambda_iou * iou::soft_iou_loss_grad(alpha, &v.mask, self.lambda_iou, &mut v.d_alpha);
+            if let Some(c) = &v.contour {
+                loss += self.lambda_contour * c.loss_grad(alpha, self.lambda_contour, &mut v.d_alpha);
+            }
+            let g = v.raster.backward(&v.d_alpha);
+            total += loss;
+            for i in 0..9 {
+                grad[i] += g[i];
+            }
+        }
+        let n = self.views.len().max(1) as f64;
+        (total / n, grad.map(|g| g / n))
+    }
+
+    /// Hard IoU per view at the stage's resolution.
+    pub fn hard_ious(&self, mesh: &Mesh, pose: &Pose) -> Vec<f64> {
+        self.views
+            .iter()
+            .map(|v| render_bits(&project_mesh(mesh, pose, &v.camera), &mesh.triangles, &v.camera).iou(&v.bits))
+            .collect()
+    }
+
+    /// Mean hard IoU over views: how candidates are ranked between stages.
+    pub fn hard_score(&self, mesh: &Mesh, pose: &Pose) -> f64 {
+        let v = self.hard_ious(mesh, pose);
+        v.iter().sum::<f64>() / v.len().max(1) as f64
+    }
+}

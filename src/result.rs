@@ -1,0 +1,101 @@
+//! The result of a fit (SPEC §3): the pose in its wire form plus the quaternion and
+//! the 4×4 object-to-world matrix, per-view figures, the loss history, the time
+//! taken (measured by the caller: the core has no clock) and, given a ground truth,
+//! the error figures of SPEC §6.
+
+use crate::estimator::{Estimator, Termination};
+use crate::metrics::{pose_errors, PoseErrors};
+use crate::pose::{mat3_to_rows, mat4_to_rows, Pose};
+use crate::so3;
+use serde::{Deserialize, Serialize};
+
+/// A pose with every form a reader may want.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct PoseOut {
+    /// 3×3 row-major rotation.
+    pub rotation: [[f64; 3]; 3],
+    /// Unit quaternion [w, x, y, z], w ≥ 0.
+    pub quaternion: [f64; 4],
+    /// Intrinsic XYZ Euler angles in degrees (display only).
+    pub euler_xyz_deg: [f64; 3],
+    /// Translation.
+    pub translation: [f64; 3],
+    /// Per-axis scale.
+    pub scale: [f64; 3],
+}
+
+impl PoseOut {
+    /// All forms of a pose.
+    pub fn from_pose(p: &Pose) -> PoseOut {
+        let q = p.quaternion();
+        PoseOut {
+            rotation: mat3_to_rows(p.rotation),
+            quaternion: [q.w, q.x, q.y, q.z],
+            euler_xyz_deg: so3::to_euler_xyz_deg(p.rotation).to_array(),
+            translation: p.translation.to_array(),
+            scale: p.scale.to_array(),
+        }
+    }
+}
+
+/// Figures of one view at the estimated pose.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct ViewResult {
+    /// The view's name.
+    pub name: String,
+    /// Hard silhouette IoU against the mask, full resolution.
+    pub iou: f64,
+    /// Hausdorff distance between the rendered and the mask's contours, pixels.
+    pub hausdorff_px: f64,
+}
+
+/// The result file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FitResult {
+    /// The estimated pose.
+    pub pose: PoseOut,
+    /// 4×4 object-to-world matrix, row-major.
+    pub matrix: [[f64; 4]; 4],
+    /// Per-view figures.
+    pub views: Vec<ViewResult>,
+    /// Mean per-view IoU.
+    pub mean_iou: f64,
+    /// The loss at every optimiser iteration of the winning candidate.
+    pub loss_history: Vec<f64>,
+    /// Optimiser iterations over all candidates.
+    pub iterations: usize,
+    /// Why the fit stopped.
+    pub termination: Option<Termination>,
+    /// Wall-clock seconds, as measured by the caller.
+    pub seconds: f64,
+    /// Error figures against the scene's ground truth, when it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub errors: Option<PoseErrors>,
+}
+
+impl Estimator {
+    /// The result at the current (best) pose. `seconds` is the caller's measurement;
+    /// `ground_truth` adds the error figures.
+    pub fn result(&self, seconds: f64, ground_truth: Option<&Pose>) -> FitResult {
+        let pose = self.pose();
+        let figs = self.view_figures(&pose);
+        let views: Vec<ViewResult> = self
+            .views()
+            .iter()
+            .zip(&figs)
+            .map(|(v, f)| ViewResult { name: v.name.clone(), iou: f.0, hausdorff_px: f.1 })
+            .collect();
+        let mean_iou = views.iter().map(|v| v.iou).sum::<f64>() / views.len().max(1) as f64;
+        FitResult {
+            pose: PoseOut::from_pose(&pose),
+            matrix: mat4_to_rows(pose.matrix()),
+            views,
+            mean_iou,
+            loss_history: self.loss_history(),
+            iterations: self.progress().iteration,
+            termination: self.progress().termination,
+            seconds,
+            errors: ground_truth.map(|gt| pose_errors(self.mesh(), &pose, gt)),
+        }
+    }
+}

@@ -1,0 +1,138 @@
+//! Synthetic scenes: cameras placed around a posed mesh, looking at it, with masks
+//! rendered by the hard rasteriser — for tests, benchmarks, examples and the
+//! accuracy evaluation. Deterministic for a given seed.
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::mask::Mask;
+use crate::mesh::Mesh;
+use crate::pose::Pose;
+use crate::raster::hard;
+use crate::raster::shade::render_shaded;
+use crate::view::Rgba;
+use glam::{DMat3, DQuat, DVec3};
+use rand::rngs::SmallRng;
+use rand::{Rng, SeedableRng};
+
+/// How to make a synthetic scene.
+#[derive(Debug, Clone)]
+pub struct SynthSettings {
+    /// Number of views (default 4).
+    pub views: usize,
+    /// Image width in pixels (default 256).
+    pub width: u32,
+    /// Image height in pixels (default 256).
+    pub height: u32,
+    /// Random seed (default 0).
+    pub seed: u64,
+    /// Largest per-axis log-scale deviation of a random pose (default 0.2, i.e. ×0.82…×1.22).
+    pub max_log_scale: f64,
+    /// Fraction of the canvas' half-size the object's bounding sphere may span (default 0.7).
+    pub fill: f64,
+    /// Also render shaded "photographs" (default false).
+    pub images: bool,
+}
+
+impl Default for SynthSettings {
+    fn default() -> Self {
+        SynthSettings { views: 4, width: 256, height: 256, seed: 0, max_log_scale: 0.2, fill: 0.7, images: false }
+    }
+}
+
+/// A synthetic scene: the true pose and one camera and mask per view.
+#[derive(Debug, Clone)]
+pub struct SynthScene {
+    /// The pose the masks were rendered at.
+    pub pose: Pose,
+    /// Cameras, OpenCV axes.
+    pub cameras: Vec<Camera>,
+    /// Hard silhouettes, one per camera.
+    pub masks: Vec<Mask>,
+    /// Shaded renders, one per camera, when asked for.
+    pub images: Vec<Rgba>,
+}
+
+/// A rotation drawn uniformly from SO(3).
+pub fn random_rotation(rng: &mut SmallRng) -> DMat3 {
+    // Shoemake's method.
+    let (u1, u2, u3): (f64, f64, f64) = (rng.gen(), rng.gen(), rng.gen());
+    let tau = std::f64::consts::TAU;
+    let q = DQuat::from_xyzw(
+        (1.0 - u1).sqrt() * (tau * u2).sin(),
+        (1.0 - u1).sqrt() * (tau * u2).cos(),
+        u1.sqrt() * (tau * u3).sin(),
+        u1.sqrt() * (tau * u3).cos(),
+    );
+    DMat3::from_quat(q.normalize())
+}
+
+/// A random pose for `mesh`: uniform rotation, per-axis scale within
+/// `exp(±max_log_scale)`, and the object's centre within a tenth of its radius of the origin.
+pub fn random_pose(mesh: &Mesh, max_log_scale: f64, rng: &mut SmallRng) -> Pose {
+    let b = mesh.bounds().unwrap_or(crate::mesh::Bounds { min: DVec3::ZERO, max: DVec3::ZERO });
+    let radius = (b.size().length() * 0.5).max(1e-9);
+    let rotation = random_rotation(rng);
+    let scale = DVec3::new(
+        rng.gen_range(-max_log_scale..=max_log_scale).exp(),
+        rng.gen_range(-max_log_scale..=max_log_scale).exp(),
+        rng.gen_range(-max_log_scale..=max_log_scale).exp(),
+    );
+    let jitter = DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)) * 0.1 * radius;
+    let translation = -(rotation * (scale * b.centre())) + jitter;
+    Pose { rotation, translation, scale }
+}
+
+/// Makes a synthetic scene of `mesh` at `pose` (random when `None`).
+pub fn synthesize(mesh: &Mesh, settings: &SynthSettings, pose: Option<Pose>) -> Result<SynthScene> {
+    if settings.views == 0 || settings.views > 64 {
+        return Err(Error::Settings(format!("views must be between 1 and 64, got {}", settings.views)));
+    }
+    if settings.width < 8 || settings.height < 8 {
+        return Err(Error::Settings("width and height must be at least 8 pixels".into()));
+    }
+    let mut rng = SmallRng::seed_from_u64(settings.seed);
+    let pose = match pose {
+        Some(p) => p,
+        None => random_pose(mesh, settings.max_log_scale, &mut rng),
+    };
+    pose.validate()?;
+    let b = mesh.bounds().ok_or_else(|| Error::Mesh { file: "mesh".into(), problem: "has no vertices".into() })?;
+    // World-space bounding sphere of the posed mesh.
+    let centre = pose.apply(b.centre());
+    let radius = mesh.positions.iter().map(|p| pose.apply(*p).distance(centre)).fold(0.0, f64::max).max(1e-9);
+    let (w, h) = (settings.width, settings.height);
+    let f = 1.1 * w.max(h) as f64;
+    let half = 0.5 * w.min(h) as f64 * settings.fill;
+    let az0: f64 = rng.gen_range(0.0..360.0);
+    let mut cameras = Vec::with_capacity(settings.views);
+    let mut masks = Vec::with_capacity(settings.views);
+    for i in 0..settings.views {
+        let az = (az0 + 360.0 * i as f64 / settings.views as f64 + rng.gen_range(-15.0..15.0)).to_radians();
+        let el = rng.gen_range(-20.0f64..60.0).to_radians();
+        let dir = DVec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin());
+        // Distance at which the bounding sphere spans `half` pixels, with some variety.
+        let mut dist = radius * (1.0 + (f / half).powi(2)).sqrt() * rng.gen_range(1.0..1.3);
+        let up = if el.abs() > 80f64.to_radians() { DVec3::Z } else { DVec3::Y };
+        let mut tries = 0;
+        loop {
+            let cam = Camera::look_at(centre + dir * dist, centre, up, w, h, f);
+            let mask = hard::render(mesh, &pose, &cam);
+            if mask.area() > 0 && !mask.touches_border() {
+                cameras.push(cam);
+                masks.push(mask);
+                break;
+            }
+            tries += 1;
+            dist *= 1.25;
+            if tries > 20 {
+                return Err(Error::View { view: format!("view{i}"), problem: "could not fit the object inside the canvas".into() });
+            }
+        }
+    }
+    let images = if settings.images {
+        cameras.iter().map(|c| render_shaded(mesh, &pose, c, [230, 190, 40])).collect()
+    } else {
+        Vec::new()
+    };
+    Ok(SynthScene { pose, cameras, masks, images })
+}

@@ -1,0 +1,237 @@
+// The page: user interface only. The fit lives in worker.js; this file sends it the
+// user's files and commands and paints the frames it sends back (one canvas per
+// view, the loss curve, the pose, the status).
+const $ = (id) => document.getElementById(id);
+const ui = {
+  drop: $('drop'), input: $('file-input'), example: $('load-example'),
+  start: $('start'), pause: $('pause'), step: $('step'), reset: $('reset'), download: $('download'),
+  status: $('status'), rate: $('rate'), error: $('error'), views: $('views'), loss: $('loss'),
+};
+
+let worker = null;
+let views = []; // [{ name, width, height, canvas, iou }]
+let state = 'empty'; // empty | ready | running | paused | done
+let latest = null; // the last frame not yet painted
+let paints = []; // times of recent redraws while running, for the rate figure
+let paintCount = 0;
+
+// ---- worker -------------------------------------------------------------------
+function startWorker() {
+  worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+  worker.onmessage = ({ data }) => handlers[data.type]?.(data);
+  worker.onerror = (e) => {
+    e.preventDefault();
+    showError(`the worker failed to start: ${e.message || 'could the wasm package (www/pkg/) be missing?'}`);
+  };
+}
+
+const handlers = {
+  loaded(msg) {
+    clearError();
+    buildViews(msg.views);
+    state = 'ready';
+    updateButtons();
+  },
+  frame(msg) {
+    if (state === 'running' && !msg.running) state = msg.progress.done ? 'done' : 'paused';
+    if (msg.progress.done) state = 'done';
+    if (!latest) requestAnimationFrame(paint);
+    latest = msg;
+    updateButtons();
+  },
+  result(msg) {
+    const url = URL.createObjectURL(new Blob([msg.json], { type: 'application/json' }));
+    const a = Object.assign(document.createElement('a'), { href: url, download: 'localisebot-result.json' });
+    document.body.append(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(url), 10_000);
+  },
+  error(msg) {
+    showError(msg.message);
+    if (state === 'running') state = 'paused';
+    if (msg.fatal) {
+      // A trap inside wasm: start afresh rather than trust the old instance.
+      worker.terminate();
+      buildViews([]);
+      state = 'empty';
+      startWorker();
+    }
+    updateButtons();
+  },
+};
+
+const send = (type, extra = {}, transfer = []) => worker.postMessage({ type, ...extra }, transfer);
+
+// ---- files --------------------------------------------------------------------
+async function sendFiles(list) {
+  clearError();
+  if (list.length === 0) return;
+  ui.status.textContent = `reading ${list.length} file(s)…`;
+  const files = await Promise.all(
+    list.map(async ({ path, file }) => ({ path, bytes: new Uint8Array(await file.arrayBuffer()) })),
+  );
+  send('load', { files }, files.map((f) => f.bytes.buffer));
+}
+
+// Every file under a dropped entry, with its folder-relative path.
+async function walk(entry, out) {
+  if (entry.isFile) {
+    const file = await new Promise((ok, fail) => entry.file(ok, fail));
+    out.push({ path: entry.fullPath.replace(/^\//, ''), file });
+  } else if (entry.isDirectory) {
+    const reader = entry.createReader();
+    for (;;) {
+      const batch = await new Promise((ok, fail) => reader.readEntries(ok, fail));
+      if (batch.length === 0) break;
+      for (const e of batch) await walk(e, out);
+    }
+  }
+}
+
+async function dropped(dt) {
+  const entries = [...dt.items].map((i) => i.webkitGetAsEntry?.()).filter(Boolean);
+  if (entries.length === 0) return [...dt.files].map((file) => ({ path: file.name, file }));
+  const out = [];
+  for (const e of entries) await walk(e, out);
+  return out;
+}
+
+ui.input.addEventListener('change', () => {
+  const list = [...ui.input.files].map((file) => ({ path: file.webkitRelativePath || file.name, file }));
+  ui.input.value = '';
+  sendFiles(list).catch((e) => showError(e.message));
+});
+ui.drop.addEventListener('dragover', (e) => {
+  e.preventDefault();
+  ui.drop.classList.add('over');
+});
+ui.drop.addEventListener('dragleave', () => ui.drop.classList.remove('over'));
+ui.drop.addEventListener('drop', (e) => {
+  e.preventDefault();
+  ui.drop.classList.remove('over');
+  dropped(e.dataTransfer).then(sendFiles).catch((err) => showError(err.message));
+});
+
+// ---- controls -----------------------------------------------------------------
+ui.example.addEventListener('click', () => {
+  clearError();
+  ui.status.textContent = 'loading the example…';
+  send('example');
+});
+ui.start.addEventListener('click', () => {
+  state = 'running';
+  paints = [];
+  updateButtons();
+  send('start');
+});
+ui.pause.addEventListener('click', () => send('pause'));
+ui.step.addEventListener('click', () => send('step'));
+ui.reset.addEventListener('click', () => {
+  state = 'ready';
+  send('reset');
+});
+ui.download.addEventListener('click', () => send('result'));
+
+function updateButtons() {
+  const loaded = state !== 'empty';
+  ui.start.disabled = !(state === 'ready' || state === 'paused');
+  ui.pause.disabled = state !== 'running';
+  ui.step.disabled = !(state === 'ready' || state === 'paused');
+  ui.reset.disabled = !loaded;
+  ui.download.disabled = !loaded;
+}
+
+function showError(message) {
+  ui.error.textContent = message;
+  ui.error.hidden = false;
+}
+function clearError() {
+  ui.error.hidden = true;
+  ui.error.textContent = '';
+}
+
+// ---- painting -----------------------------------------------------------------
+function buildViews(list) {
+  ui.views.replaceChildren();
+  views = list.map((v) => {
+    const fig = $('view-template').content.firstElementChild.cloneNode(true);
+    const canvas = fig.querySelector('canvas');
+    canvas.width = v.width;
+    canvas.height = v.height;
+    fig.querySelector('.name').textContent = v.name;
+    ui.views.append(fig);
+    return { ...v, canvas, ctx: canvas.getContext('2d'), iou: fig.querySelector('.iou') };
+  });
+}
+
+function paint() {
+  const msg = latest;
+  latest = null;
+  if (!msg || msg.overlays.length !== views.length) return;
+  const p = msg.progress;
+  views.forEach((v, i) => {
+    v.ctx.putImageData(new ImageData(new Uint8ClampedArray(msg.overlays[i]), v.width, v.height), 0, 0);
+    v.iou.textContent = p.iou[i].toFixed(3);
+  });
+  drawLoss(msg.losses);
+  showPose(p.pose);
+  ui.status.textContent = statusText(p);
+  paintCount++;
+  ui.status.dataset.paints = paintCount;
+  const now = performance.now();
+  if (state === 'running' || p.done) {
+    paints.push(now);
+    while (paints.length > 2 && now - paints[0] > 1000) paints.shift();
+  }
+  if (paints.length > 1) {
+    const span = (paints.at(-1) - paints[0]) / 1000;
+    ui.rate.textContent = `${((paints.length - 1) / span).toFixed(0)} redraws/s`;
+  }
+}
+
+function statusText(p) {
+  const secs = `${p.seconds.toFixed(2)} s`;
+  if (p.done) {
+    const why = p.termination === 'converged' ? '' : ` (${p.termination.replace('_', ' ')})`;
+    return `converged${why} in ${p.iteration} iterations, ${secs}`;
+  }
+  const prefix = state === 'paused' ? 'paused — ' : state === 'ready' && p.iteration === 0 && p.searched === 0 ? 'ready — ' : '';
+  if (p.phase === 'search') return `${prefix}search: ${p.searched}/${p.search_total} orientations, ${secs}`;
+  const loss = Number.isFinite(p.loss) ? `, loss ${p.loss.toFixed(4)}` : '';
+  return `${prefix}refine: stage ${p.stage + 1}/${p.stages}, candidate ${p.candidate + 1}, iteration ${p.iteration}${loss}, ${secs}`;
+}
+
+const fmt = (xs, d = 3) => xs.map((x) => x.toFixed(d)).join('  ');
+function showPose(pose) {
+  $('pose-t').textContent = fmt(pose.translation, 4);
+  $('pose-s').textContent = fmt(pose.scale, 4);
+  $('pose-e').textContent = fmt(pose.euler_xyz_deg, 1);
+  $('pose-q').textContent = fmt(pose.quaternion, 4);
+}
+
+// The loss of every refinement iteration, log scale.
+function drawLoss(losses) {
+  const c = ui.loss;
+  const ctx = c.getContext('2d');
+  ctx.clearRect(0, 0, c.width, c.height);
+  const ys = [...losses].filter((y) => y > 0 && Number.isFinite(y)).map(Math.log10);
+  if (ys.length < 2) return;
+  const lo = Math.min(...ys);
+  const hi = Math.max(...ys);
+  const pad = 18;
+  const x = (i) => pad + (i / (ys.length - 1)) * (c.width - 2 * pad);
+  const y = (v) => c.height - pad - ((v - lo) / (hi - lo || 1)) * (c.height - 2 * pad);
+  ctx.strokeStyle = '#1f6feb';
+  ctx.lineWidth = 1.5;
+  ctx.beginPath();
+  ys.forEach((v, i) => (i ? ctx.lineTo(x(i), y(v)) : ctx.moveTo(x(i), y(v))));
+  ctx.stroke();
+  ctx.fillStyle = '#555';
+  ctx.font = '11px system-ui, sans-serif';
+  ctx.fillText(`${10 ** hi < 0.01 ? (10 ** hi).toExponential(1) : (10 ** hi).toFixed(3)}`, 2, pad - 6);
+  ctx.fillText(`${(10 ** ys.at(-1)).toFixed(4)} (${ys.length} iterations)`, 2, c.height - 4);
+}
+
+startWorker();
+updateButtons();
