@@ -172,6 +172,7 @@ pub struct Estimator {
     radius: f64,
     phase: Phase,
     // Search state.
+    search_mesh: Mesh,
     rotations: Vec<DMat3>,
     next_rotation: usize,
     start: Pose,
@@ -207,6 +208,7 @@ impl Estimator {
         let radius = (b.size().length() * 0.5).max(1e-12);
         let mut est = Estimator {
             low: Vec::new(),
+            search_mesh: Mesh::default(),
             rotations: Vec::new(),
             next_rotation: 0,
             start: Pose::IDENTITY,
@@ -236,6 +238,8 @@ impl Estimator {
                 est.start = est.initial_guess()?;
                 est.rotations = est.settings.search.sampling.rotations();
                 est.low = search::low_res_views(&est.views, est.settings.search.resolution);
+                // Cells of about two pixels at the search resolution: silhouettes within a pixel.
+                est.search_mesh = est.mesh.clustered(est.settings.search.resolution * 3 / 8);
             }
         }
         Ok(est)
@@ -336,7 +340,7 @@ impl Estimator {
             let c = self.start.apply(self.centre);
             let pose = Pose { rotation: r, translation: c - r * (s * self.centre), scale: s };
             let cand =
-                search::score_candidate(&self.mesh, &self.low, pose, self.centre, self.settings.search.refit_rounds);
+                search::score_candidate(&self.search_mesh, &self.low, pose, self.centre, self.settings.search.refit_rounds);
             self.scored.push(cand);
         }
         self.next_rotation = end;
@@ -456,8 +460,8 @@ impl Estimator {
         let pose = self.pose();
         let view_iou = match (&self.phase, &self.target) {
             (Phase::Search, _) | (_, None) => self.low.iter().map(|v| {
-                let proj = crate::raster::project::project_mesh(&self.mesh, &pose, &v.camera);
-                hard::render_bits(&proj, &self.mesh.triangles, &v.camera).iou(&v.bits)
+                let proj = crate::raster::project::project_mesh(&self.search_mesh, &pose, &v.camera);
+                hard::render_bits(&proj, &self.search_mesh.triangles, &v.camera).iou(&v.bits)
             }).collect(),
             (_, Some(t)) => t.hard_ious(&self.mesh, &pose),
         };

@@ -21,6 +21,7 @@
 pub mod camera;
 pub mod error;
 pub mod estimator;
+pub mod eval;
 pub mod io;
 pub mod loss;
 pub mod mask;
@@ -35,6 +36,8 @@ pub mod result;
 pub mod so3;
 pub mod synth;
 pub mod view;
+#[cfg(target_arch = "wasm32")]
+pub mod wasm;
 
 pub use camera::{Camera, CameraJson, Convention};
 pub use error::{Error, Result};

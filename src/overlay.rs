@@ -196,3 +196,124 @@ fn clip_segment(a: DVec2, b: DVec2, lo: DVec2, hi: DVec2) -> Option<(DVec2, DVec
     }
     (t0 <= t1).then(|| (a + d * t0, a + d * t1))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Camera;
+
+    fn rect(w: u32, h: u32, x0: u32, y0: u32, x1: u32, y1: u32) -> Mask {
+        let mut m = Mask::empty(w, h);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                m.data[(y * w + x) as usize] = 1;
+            }
+        }
+        m
+    }
+
+    fn view(mask: Mask, image: Option<Rgba>) -> View {
+        View {
+            name: "v".into(),
+            camera: Camera::look_at(
+                glam::DVec3::Z,
+                glam::DVec3::ZERO,
+                glam::DVec3::Y,
+                mask.width,
+                mask.height,
+                10.0,
+            ),
+            mask,
+            image,
+        }
+    }
+
+    fn px(img: &Rgba, x: u32, y: u32) -> [u8; 4] {
+        let i = ((y * img.width + x) * 4) as usize;
+        img.data[i..i + 4].try_into().unwrap()
+    }
+
+    #[test]
+    fn outline_pixels_are_exactly_the_mask_border() {
+        let style = OverlayStyle::default();
+        let v = view(rect(8, 7, 2, 1, 5, 4), None);
+        let img = overlay(&v, None);
+        for y in 0..7 {
+            for x in 0..8 {
+                let inside = (2..=5).contains(&x) && (1..=4).contains(&y);
+                let border = inside && (x == 2 || x == 5 || y == 1 || y == 4);
+                let want = if border {
+                    style.mask_colour
+                } else if inside {
+                    [NO_IMAGE_OBJECT, NO_IMAGE_OBJECT, NO_IMAGE_OBJECT, 255]
+                } else {
+                    [NO_IMAGE_BACKGROUND, NO_IMAGE_BACKGROUND, NO_IMAGE_BACKGROUND, 255]
+                };
+                assert_eq!(px(&img, x, y), want, "pixel ({x}, {y})");
+            }
+        }
+    }
+
+    #[test]
+    fn rendered_contour_surrounds_the_rendered_object_over_the_image() {
+        let image = Rgba {
+            width: 20,
+            height: 16,
+            data: [10, 20, 30, 0].repeat(20 * 16),
+        };
+        let v = view(rect(20, 16, 2, 2, 8, 8), Some(image));
+        let rendered = rect(20, 16, 10, 6, 15, 12);
+        let style = OverlayStyle::default();
+        let img = overlay(&v, Some(&rendered));
+        let has = |x, y, c| px(&img, x, y) == c;
+        // The rendered box's corners and edges carry the render colour, its inside the image.
+        for (x, y) in [(10, 6), (15, 12), (12, 6), (10, 9), (15, 8)] {
+            assert!(has(x, y, style.render_colour), "({x}, {y})");
+        }
+        assert!(has(12, 9, [10, 20, 30, 255]), "the image shows through, opaque");
+        assert!(has(2, 2, style.mask_colour) && has(8, 5, style.mask_colour));
+        let n = img.data.chunks_exact(4).filter(|p| *p == style.render_colour).count();
+        assert_eq!(n, 2 * 6 + 2 * 5, "the 6 × 7 box's ring has 22 pixels");
+        // A low-resolution render is stretched onto the view.
+        let small = rect(10, 8, 5, 3, 7, 6);
+        let img2 = overlay(&v, Some(&small));
+        assert!(px(&img2, 10, 6) == style.render_colour && px(&img2, 15, 13) == style.render_colour);
+        // Wide images get 2-pixel lines: the ring outside the mask is painted too.
+        let big = view(rect(600, 20, 100, 5, 200, 15), None);
+        let img3 = overlay(&big, None);
+        assert!(px(&img3, 100, 10) == style.mask_colour && px(&img3, 99, 10) == style.mask_colour);
+        assert!(px(&img3, 98, 10) != style.mask_colour && px(&img3, 101, 10) != style.mask_colour);
+    }
+
+    #[test]
+    fn polygons_are_closed_clipped_and_encode_to_png() {
+        let mut img = Rgba {
+            width: 12,
+            height: 10,
+            data: vec![0; 12 * 10 * 4],
+        };
+        let red = [255, 0, 0, 255];
+        let square = [(2.0, 2.0), (8.0, 2.0), (8.0, 6.0), (2.0, 6.0)].map(|(x, y)| DVec2::new(x, y));
+        draw_polygon(&mut img, &square, red);
+        let lit: Vec<(u32, u32)> = (0..120)
+            .filter(|&i| img.data[i * 4..i * 4 + 4] == red)
+            .map(|i| (i as u32 % 12, i as u32 / 12))
+            .collect();
+        let want: Vec<(u32, u32)> = (2..=6)
+            .flat_map(|y| (2..=8).map(move |x| (x, y)))
+            .filter(|&(x, y)| x == 2 || x == 8 || y == 2 || y == 6)
+            .collect();
+        assert_eq!(lit, want);
+        // A segment running far off the image, and a non-finite one, do not panic.
+        draw_polygon(
+            &mut img,
+            &[DVec2::new(-1e9, 5.0), DVec2::new(1e9, 5.0), DVec2::NAN],
+            red,
+        );
+        assert!((0..12).all(|x| img.data[((5 * 12 + x) * 4) as usize] == 255));
+        let png = crate::io::png::encode_rgba(&img);
+        let back = image::load_from_memory(&png).unwrap().to_rgba8();
+        assert_eq!((back.width(), back.height()), (12, 10));
+        assert_eq!(back.into_raw(), img.data);
+    }
+}

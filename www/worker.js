@@ -13,8 +13,7 @@ let running = false;
 const post = (msg, transfer = []) => postMessage(msg, transfer);
 
 // Sends the current state: progress, loss trace and every view's overlay.
-function frame() {
-  const progress = session.progress();
+function frame(progress = session.progress()) {
   const losses = session.losses();
   const overlays = [];
   for (let i = 0; i < session.viewCount; i++) {
@@ -66,9 +65,9 @@ async function example() {
 // step messages get in.
 function run() {
   if (!running || !session) return;
-  session.stepFor(BUDGET_MS);
-  if (session.done) running = false;
-  frame();
+  const progress = session.stepFor(BUDGET_MS);
+  if (progress.done) running = false;
+  frame(progress);
   if (running) setTimeout(run, 0);
 }
 
@@ -87,8 +86,7 @@ const handlers = {
   step: () => {
     running = false;
     if (!session) return;
-    session.step(1);
-    frame();
+    frame(session.step(1));
   },
   reset: () => {
     running = false;

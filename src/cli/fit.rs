@@ -100,8 +100,12 @@ pub fn run(a: &FitArgs) -> CliResult {
             .expect("the template is valid")
             .progress_chars("=> "),
     );
+    let mut search_s = 0.0;
     while !est.is_done() {
         let p = est.step();
+        if p.phase != Phase::Search && search_s == 0.0 {
+            search_s = start.elapsed().as_secs_f64();
+        }
         match p.phase {
             Phase::Search => {
                 bar.set_position((30 * p.searched / p.search_total.max(1)) as u64);
@@ -134,10 +138,11 @@ pub fn run(a: &FitArgs) -> CliResult {
         }
     }
     let mut line = format!(
-        "{}: mean IoU {:.4} in {:.2} s ({} iterations, {:?})",
+        "{}: mean IoU {:.4} in {:.2} s (search {:.2} s; {} iterations, {:?})",
         a.out.display(),
         result.mean_iou,
         seconds,
+        search_s,
         result.iterations,
         result.termination
     );

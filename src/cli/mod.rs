@@ -1,9 +1,11 @@
 //! Command-line parsing (clap) and dispatch. Each command lives in its own file;
 //! every error reaches the user as one line on stderr and a non-zero exit status.
 
+mod bench;
 mod files;
 mod fit;
 mod info;
+mod loss;
 mod render;
 mod synth;
 
@@ -29,6 +31,10 @@ enum Command {
     Synth(synth::SynthArgs),
     /// Estimate the object's pose in a scene (search, then refine); write the result JSON.
     Fit(fit::FitArgs),
+    /// Print the multi-view loss, per-view losses and the 9-gradient at a pose, as JSON.
+    Loss(loss::LossArgs),
+    /// Time the forward + backward pass and full fits (see BENCHMARKS.md).
+    Bench(bench::BenchArgs),
     /// Draw overlays (mask outline and rendered contour over each view) for a pose.
     Render {
         /// The scene file.
@@ -49,6 +55,8 @@ pub fn main() -> i32 {
         Command::Info { mesh } => info::run(&mesh),
         Command::Synth(args) => synth::run(&args),
         Command::Fit(args) => fit::run(&args),
+        Command::Loss(args) => loss::run(&args),
+        Command::Bench(args) => bench::run(&args),
         Command::Render { scene, pose, out } => render::run(&scene, &pose, &out),
     };
     match result {

@@ -147,6 +147,23 @@ fn check_required(required: &[String]) -> std::result::Result<(), String> {
 /// verdict on required extensions, which [`check_required`] has given already, and
 /// minus missing POSITION bounds, which are not needed.
 fn validate(root: &gltf::json::Root) -> std::result::Result<(), String> {
+    // The crate's primitive check indexes `accessors` with POSITION unchecked: check first.
+    let position = gltf::json::validation::Checked::Valid(gltf::json::mesh::Semantic::Positions);
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(i) = prim
+                .attributes
+                .get(&position)
+                .filter(|i| i.value() >= root.accessors.len())
+            {
+                return Err(format!(
+                    "invalid glTF: meshes[{m}].primitives[{p}] POSITION refers to accessor {}, but there are {}",
+                    i.value(),
+                    root.accessors.len()
+                ));
+            }
+        }
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, e| {
         let path = path().to_string();

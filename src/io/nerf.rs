@@ -325,7 +325,8 @@ mod tests {
         let names: Vec<&str> = imp.scene.views.iter().map(|v| v.name.as_str()).collect();
         assert_eq!(names, ["a", "b"]);
         assert_eq!(imp.warnings.len(), 3, "{:?}", imp.warnings);
-        assert!(imp.warnings[0].contains("./missing") && imp.warnings[1].contains("no transparent"));
+        assert!(imp.warnings[0].contains("sub/b.png") && imp.warnings[0].contains("rescaled"));
+        assert!(imp.warnings[1].contains("./missing") && imp.warnings[2].contains("no transparent"));
         let a = &imp.scene.views[0].camera;
         assert!((a.fx - 10.0 / (0.5f64).tan()).abs() < 1e-12 && a.fy == a.fx);
         assert_eq!((a.cx, a.cy), (9.5, 4.5));

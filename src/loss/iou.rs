@@ -9,8 +9,12 @@
 /// an empty render against an empty mask.
 pub const UNION_EPS: f64 = 1e-6;
 
-/// Intersection `Σ A·M` and union `Σ (A + M − A·M) + 1e-6`.
-fn sums(alpha: &[f64], mask: &[u8]) -> (f64, f64) {
+/// Intersection `I = Σ A·M` and union `U = Σ (A + M − A·M) + 1e-6`; the loss is
+/// `1 − I/U` and `∂L/∂A_p = I/U² − M_p·(1/U + I/U²)`.
+///
+/// # Panics
+/// If `alpha` and `mask` differ in length.
+pub fn soft_iou_sums(alpha: &[f64], mask: &[u8]) -> (f64, f64) {
     assert_eq!(alpha.len(), mask.len(), "alpha and mask must have the same length");
     let (mut inter, mut sum_a, mut sum_m) = (0.0, 0.0, 0.0);
     for (&a, &m) in alpha.iter().zip(mask) {
@@ -28,7 +32,7 @@ fn sums(alpha: &[f64], mask: &[u8]) -> (f64, f64) {
 /// # Panics
 /// If `alpha` and `mask` differ in length.
 pub fn soft_iou_loss(alpha: &[f64], mask: &[u8]) -> f64 {
-    let (i, u) = sums(alpha, mask);
+    let (i, u) = soft_iou_sums(alpha, mask);
     1.0 - i / u
 }
 
@@ -39,7 +43,7 @@ pub fn soft_iou_loss(alpha: &[f64], mask: &[u8]) -> f64 {
 /// If `alpha`, `mask` and `grad` differ in length.
 pub fn soft_iou_loss_grad(alpha: &[f64], mask: &[u8], scale: f64, grad: &mut [f64]) -> f64 {
     assert_eq!(alpha.len(), grad.len(), "alpha and grad must have the same length");
-    let (i, u) = sums(alpha, mask);
+    let (i, u) = soft_iou_sums(alpha, mask);
     let g_in = -scale / u;
     let g_out = scale * i / (u * u);
     for (g, &m) in grad.iter_mut().zip(mask) {

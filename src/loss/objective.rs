@@ -10,7 +10,7 @@
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::loss::contour::ContourTarget;
-use crate::loss::iou::{soft_iou_loss, soft_iou_loss_grad};
+use crate::loss::iou::{soft_iou_loss, soft_iou_sums};
 use crate::mask::Mask;
 use crate::mesh::Mesh;
 use crate::pose::Pose;
@@ -110,7 +110,6 @@ pub struct ViewObjective {
     pub raster: SoftRasterizer,
     /// The last evaluation.
     pub last: LossValue,
-    grad_alpha: Vec<f64>,
 }
 
 impl ViewObjective {
@@ -133,7 +132,6 @@ impl ViewObjective {
             target: MaskTarget::new(mask, name)?,
             raster: SoftRasterizer::new(),
             last: LossValue::default(),
-            grad_alpha: Vec::new(),
         })
     }
 
@@ -148,18 +146,27 @@ impl ViewObjective {
         gradient: bool,
     ) -> Result<LossValue> {
         loss.validate()?;
-        let sil = self.raster.render(mesh, pose, &self.camera, soft)?;
         let t = &self.target;
         let mut v = LossValue::default();
         if gradient {
-            self.grad_alpha.clear();
-            self.grad_alpha.resize(sil.alpha.len(), 0.0);
-            v.iou = soft_iou_loss_grad(&sil.alpha, &t.mask, loss.lambda_iou, &mut self.grad_alpha);
-            v.contour = t
-                .contour
-                .loss_grad(&sil.alpha, loss.lambda_contour, &mut self.grad_alpha);
-            v.gradient = self.raster.backward(&self.grad_alpha);
+            // ∂L/∂A = λ1·(I/U² − M·(1/U + I/U²)) + λ2·W: three fixed fields, one sweep.
+            let (mask, cw) = (&t.mask, t.contour.gradient());
+            let [g_all, g_mask, g_contour] =
+                self.raster
+                    .render_with_gradients(mesh, pose, &self.camera, soft, |p| [1.0, mask[p] as f64, cw[p]])?;
+            let alpha = &self.raster.silhouette().alpha;
+            let (i, u) = soft_iou_sums(alpha, mask);
+            v.iou = 1.0 - i / u;
+            v.contour = t.contour.loss(alpha);
+            let (c_all, c_mask) = (
+                loss.lambda_iou * i / (u * u),
+                -loss.lambda_iou * (1.0 / u + i / (u * u)),
+            );
+            for k in 0..POSE_DIM {
+                v.gradient[k] = c_all * g_all[k] + c_mask * g_mask[k] + loss.lambda_contour * g_contour[k];
+            }
         } else {
+            let sil = self.raster.render(mesh, pose, &self.camera, soft)?;
             v.iou = soft_iou_loss(&sil.alpha, &t.mask);
             v.contour = t.contour.loss(&sil.alpha);
         }
@@ -180,13 +187,25 @@ impl ViewObjective {
         weight: f64,
         out: &mut NormalEquations,
     ) -> Result<LossValue> {
-        let v = self.evaluate(mesh, pose, soft, loss, false)?;
-        let alpha = &self.raster.silhouette().alpha;
-        self.grad_alpha.clear();
-        self.grad_alpha
-            .extend(alpha.iter().zip(&self.target.mask).map(|(a, &m)| a - m as f64));
+        loss.validate()?;
+        let mask = &self.target.mask;
         let w = weight / self.target.area as f64;
-        self.raster.accumulate_normal_equations(&self.grad_alpha, w, out);
+        let sil = self.raster.render_with_normal_equations(
+            mesh,
+            pose,
+            &self.camera,
+            soft,
+            |p, a| a - mask[p] as f64,
+            w,
+            out,
+        )?;
+        let mut v = LossValue {
+            iou: soft_iou_loss(&sil.alpha, mask),
+            contour: self.target.contour.loss(&sil.alpha),
+            ..LossValue::default()
+        };
+        v.total = loss.lambda_iou * v.iou + loss.lambda_contour * v.contour;
+        self.last = v;
         Ok(v)
     }
 }

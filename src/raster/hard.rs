@@ -131,19 +131,31 @@ fn for_each_span(
     if w == 0 || h == 0 {
         return;
     }
+    // Each vertex is snapped once; `SLOW` marks those behind the near plane or
+    // beyond the guard band, whose triangles take the clipping path.
+    const SLOW: i64 = i64::MIN;
+    let snapped: Vec<[i64; 2]> = (0..proj.uv.len())
+        .map(|i| {
+            let p = proj.uv[i];
+            if proj.in_front(i) && within_guard(p) {
+                [snap(p.x), snap(p.y)]
+            } else {
+                [SLOW, SLOW]
+            }
+        })
+        .collect();
     for t in triangles {
         let [a, b, c] = t.map(|i| i as usize);
+        let v = [snapped[a], snapped[b], snapped[c]];
+        if v[0][0] != SLOW && v[1][0] != SLOW && v[2][0] != SLOW {
+            triangle_spans(v, w, h, span);
+            continue;
+        }
         let front = [proj.in_front(a), proj.in_front(b), proj.in_front(c)];
         let mut poly = Poly::<DVec2>::new();
         if front == [true; 3] {
-            let uv = [proj.uv[a], proj.uv[b], proj.uv[c]];
-            if uv.iter().all(|&p| within_guard(p)) {
-                let v = uv.map(|p| [snap(p.x), snap(p.y)]);
-                triangle_spans(v, w, h, span);
-                continue;
-            }
-            for p in uv {
-                poly.push(p);
+            for i in [a, b, c] {
+                poly.push(proj.uv[i]);
             }
         } else if front == [false; 3] {
             continue;

@@ -6,3 +6,4 @@ pub mod project;
 pub mod shade;
 pub mod soft;
 pub mod soft_backward;
+mod tiles;

@@ -1,6 +1,7 @@
 //! Backward pass of the soft silhouette (`soft.rs`): from `∂L/∂A` per pixel to the
-//! 2-D vertices, the camera-frame vertices and the 9 pose parameters; and the
-//! Gauss–Newton normal equations (forward-mode `∂A_p/∂θ` per pixel).
+//! 2-D vertices, the camera-frame vertices and the 9 pose parameters; a fused
+//! render-and-backward for losses whose `∂L/∂A` is a combination of fixed per-pixel
+//! fields; and the Gauss–Newton normal equations (forward-mode `∂A_p/∂θ` per pixel).
 //!
 //! Per (pixel p, triangle j) pair, with `T_p = Π_k (1 − D_k)`:
 //! `∂A_p/∂d_j² = δ_j·T_p·D_j/σ` (no division: `∂A/∂D_j = T/(1 − D_j)` and
@@ -13,18 +14,27 @@
 //! Pose-gradient order everywhere: `[ω0, ω1, ω2, t0, t1, t2, ls0, ls1, ls2]`, ω the
 //! rotation perturbation on the right (`R·exp([ω]×)`, ω = 0 at the current pose), t the
 //! translation, ls the log scale (`s = exp(ls)`).
+//!
+//! Saturated pixels (`T < SATURATION`) and pixels no triangle reaches contribute no
+//! gradient. Every entry point re-walks the prepared geometry with the tile pass
+//! (`tiles.rs`), recomputing T bit-identically, so no per-pixel lists are stored.
 
-use crate::raster::soft::{SoftRasterizer, SoftSilhouette, TriSetup, SATURATION};
+use crate::camera::Camera;
+use crate::error::Result;
+use crate::mesh::Mesh;
+use crate::pose::Pose;
+use crate::raster::soft::{SoftRasterizer, SoftSettings, SoftSilhouette, SATURATION};
+use crate::raster::tiles::{self, Pass, Tile, TILE};
 use glam::{DVec2, DVec3};
 
 /// Number of pose parameters.
 pub const POSE_DIM: usize = 9;
 
 /// Gauss–Newton normal equations over pixel residuals r_p with Jacobian rows
-/// `J_p = ∂r_p/∂θ` (θ in the order `[ω, t, ls]`, see the module doc).
+/// `J_p = ∂r_p/∂θ = ∂A_p/∂θ` (θ in the order `[ω, t, ls]`, see the module doc).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct NormalEquations {
-    /// `Σ w·J_pᵀ J_p` (9×9, symmetric), row-major `jtj[i][j]`.
+    /// `Σ w·J_pᵀ J_p` (9×9, symmetric), `jtj[i][j]`.
     pub jtj: [[f64; POSE_DIM]; POSE_DIM],
     /// `Σ w·J_pᵀ r_p`.
     pub jtr: [f64; POSE_DIM],
@@ -45,77 +55,88 @@ impl NormalEquations {
     }
 }
 
-/// Visits every (pixel, triangle) pair that the backward pass needs — pixels with
-/// `∂L/∂A ≠ 0` (when `grad` is given) that are not saturated — calling
-/// `f(pixel index, ∂A_p/∂d², ∂d²/∂v_k, ∂d²/∂v_{k+1}, k)` with k the closest edge.
-#[inline(always)]
-fn for_each_pair(
-    sil: &SoftSilhouette,
-    tri: &TriSetup,
-    grad: Option<&[f64]>,
-    mut f: impl FnMut(usize, f64, DVec2, DVec2, usize),
-) {
-    let w = sil.width as usize;
-    let inv_sigma = 1.0 / sil.settings.sigma;
-    let m2 = sil.settings.cutoff_sq();
-    let m = m2.sqrt();
-    for y in tri.y0..=tri.y1 {
-        let yf = y as f64;
-        let (xa, xb) = tri.row_span(yf, m);
-        if xa > xb {
-            continue;
-        }
-        let base = y as usize * w;
-        for x in xa..=xb {
-            let i = base + x as usize;
-            let t = sil.transmittance[i];
-            if t < SATURATION || grad.is_some_and(|g| g[i] == 0.0) {
-                continue;
-            }
-            if let Some((pair, cl)) = tri.pair_closest(DVec2::new(x as f64, yf), m, m2) {
-                let z = pair.d2 * inv_sigma;
-                let da_dd2 = if pair.inside {
-                    t * inv_sigma / (1.0 + (-z).exp())
-                } else {
-                    -t * inv_sigma / (1.0 + z.exp())
-                };
-                let f2 = -2.0 * cl.diff;
-                f(i, da_dd2, f2 * (1.0 - cl.t), f2 * cl.t, cl.k);
-            }
-        }
-    }
-}
-
 impl SoftSilhouette {
+    /// Runs the tile pass over the prepared geometry (see `tiles::run`).
+    pub(crate) fn run_pass<const REC: bool>(&mut self, on_tile: impl FnMut(&Tile)) {
+        let pass = Pass {
+            tris: &self.tris,
+            bins: &self.bins,
+            width: self.width as usize,
+            height: self.height as usize,
+            sigma: self.settings.sigma,
+            cutoff_sq: self.settings.cutoff_sq(),
+        };
+        tiles::run::<REC>(&pass, &mut self.transmittance, &mut self.records, on_tile);
+        self.finish();
+    }
+
+    /// For K per-pixel weight fields W_f (`field(p)` gives the K weights of pixel p),
+    /// writes `∂(Σ_p W_f(p)·A_p)/∂v` into `out[v·K + f]` for every vertex v, in the same
+    /// sweep that (re)computes the silhouette.
+    pub(crate) fn field_gradients<const K: usize>(&mut self, field: impl Fn(usize) -> [f64; K], out: &mut Vec<DVec2>) {
+        out.clear();
+        out.resize(self.vertex_count * K, DVec2::ZERO);
+        let w = self.width as usize;
+        let mut ct = [[0.0f64; K]; TILE * TILE];
+        self.run_pass::<true>(|tile| {
+            for ly in 0..tile.h {
+                for lx in 0..tile.w {
+                    let li = ly * TILE + lx;
+                    let t = tile.t[li];
+                    ct[li] = if (SATURATION..1.0).contains(&t) {
+                        field((tile.y0 + ly) * w + tile.x0 + lx).map(|f| f * t)
+                    } else {
+                        [0.0; K]
+                    };
+                }
+            }
+            for r in tile.records {
+                let c = &ct[r.px as usize];
+                let (a, b) = (r.a as usize * K, r.b as usize * K);
+                for f in 0..K {
+                    out[a + f] += r.ga * c[f];
+                    out[b + f] += r.gb * c[f];
+                }
+            }
+        });
+    }
+
     /// The 2-D backward stage: from `grad_alpha` = ∂L/∂A per pixel (`width·height`
     /// values, row-major) to ∂L/∂(u, v) per vertex of the last render, written into
     /// `grad_uv` (resized to the vertex count; zero for unused or skipped vertices).
     ///
     /// # Panics
     /// If `grad_alpha.len() != width·height` (a programming error, not user input).
-    pub fn backward_2d(&self, grad_alpha: &[f64], grad_uv: &mut Vec<DVec2>) {
+    pub fn backward_2d(&mut self, grad_alpha: &[f64], grad_uv: &mut Vec<DVec2>) {
         assert_eq!(
             grad_alpha.len(),
             self.alpha.len(),
             "grad_alpha must have one value per pixel"
         );
-        grad_uv.clear();
-        grad_uv.resize(self.vertex_count, DVec2::ZERO);
-        for tri in &self.tris {
-            let mut g = [DVec2::ZERO; 3];
-            for_each_pair(self, tri, Some(grad_alpha), |i, da_dd2, ga, gb, k| {
-                let c = grad_alpha[i] * da_dd2;
-                g[k] += ga * c;
-                g[(k + 1) % 3] += gb * c;
-            });
-            for (v, gv) in tri.idx.iter().zip(g) {
-                grad_uv[*v as usize] += gv;
-            }
-        }
+        self.field_gradients(|p| [grad_alpha[p]], grad_uv);
     }
 }
 
 impl SoftRasterizer {
+    /// Chains per-vertex ∂L/∂(u, v) (given by `grad_uv(i)`) through the projection and
+    /// the pose to `[ω, t, ls]`.
+    fn pose_gradient(&self, grad_uv: impl Fn(usize) -> DVec2) -> [f64; POSE_DIM] {
+        let q = (self.camera_rotation * self.pose.rotation).transpose();
+        let (mut gw, mut gt, mut gs) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+        for (i, (y, j)) in self.scaled.iter().zip(&self.jac).enumerate() {
+            let g = grad_uv(i);
+            if g == DVec2::ZERO {
+                continue;
+            }
+            let h = q * (j[0] * g.x + j[1] * g.y);
+            gw += y.cross(h);
+            gt += h;
+            gs += *y * h;
+        }
+        let gt = self.pose.rotation * gt;
+        [gw.x, gw.y, gw.z, gt.x, gt.y, gt.z, gs.x, gs.y, gs.z]
+    }
+
     /// Backward of the last [`SoftRasterizer::render`]: from ∂L/∂A per pixel to
     /// ∂L/∂θ, θ = `[ω0, ω1, ω2, t0, t1, t2, ls0, ls1, ls2]` (ω: right rotation
     /// perturbation `R·exp([ω]×)`; t: translation; ls: log scale). The intermediate
@@ -126,19 +147,7 @@ impl SoftRasterizer {
     /// If `grad_alpha.len()` is not the silhouette's pixel count.
     pub fn backward(&mut self, grad_alpha: &[f64]) -> [f64; POSE_DIM] {
         self.backward_camera_frame(grad_alpha);
-        let q = (self.camera_rotation * self.pose.rotation).transpose();
-        let (mut gw, mut gt, mut gs) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
-        for (y, gc) in self.scaled.iter().zip(&self.grad_cam) {
-            if *gc == DVec3::ZERO {
-                continue;
-            }
-            let h = q * *gc;
-            gw += y.cross(h);
-            gt += h;
-            gs += *y * h;
-        }
-        let gt = self.pose.rotation * gt;
-        [gw.x, gw.y, gw.z, gt.x, gt.y, gt.z, gs.x, gs.y, gs.z]
+        self.pose_gradient(|i| self.grad_uv[i])
     }
 
     /// Backward to the camera-frame vertices (after [`SoftRasterizer::render`] or
@@ -164,6 +173,31 @@ impl SoftRasterizer {
         &self.grad_cam
     }
 
+    /// Renders `mesh` at `pose` and, in the same sweep, returns for each of K
+    /// per-pixel weight fields W_f (`field(p)` gives pixel p's K weights, p row-major)
+    /// the 9-gradient of `Σ_p W_f(p)·A_p`, order `[ω0, ω1, ω2, t0, t1, t2, ls0, ls1, ls2]`.
+    /// A loss whose `∂L/∂A` is a combination of such fields with coefficients that
+    /// depend on A only through sums (IoU, contour) gets its gradient from this one
+    /// pass; the silhouette is then in [`SoftRasterizer::silhouette`].
+    pub fn render_with_gradients<const K: usize>(
+        &mut self,
+        mesh: &Mesh,
+        pose: &Pose,
+        camera: &Camera,
+        settings: &SoftSettings,
+        field: impl Fn(usize) -> [f64; K],
+    ) -> Result<[[f64; POSE_DIM]; K]> {
+        self.prepare(mesh, pose, camera, settings)?;
+        let mut buf = std::mem::take(&mut self.grad_fields);
+        self.silhouette.field_gradients(field, &mut buf);
+        let mut out = [[0.0; POSE_DIM]; K];
+        for (f, o) in out.iter_mut().enumerate() {
+            *o = self.pose_gradient(|i| buf[i * K + f]);
+        }
+        self.grad_fields = buf;
+        Ok(out)
+    }
+
     /// `∂(u, v)/∂θ` of every vertex at the last render's pose (rows u, v; 9 columns
     /// in the order `[ω, t, ls]`).
     fn vertex_pose_jacobians(&mut self) {
@@ -186,71 +220,136 @@ impl SoftRasterizer {
         }
     }
 
-    /// Adds this view's Gauss–Newton terms for per-pixel residuals `residual` (one
-    /// per pixel, e.g. `A_p − M_p`) whose Jacobian is `∂A_p/∂θ`, each weighted by
-    /// `weight`, to `out`: `JᵀJ += w·Σ J_pJ_pᵀ`, `Jᵀr += w·Σ J_p r_p`,
-    /// `cost += ½ w·Σ r_p²` (θ order `[ω, t, ls]`). Uses the last render.
+    /// Renders `mesh` at `pose` and, in the same sweep, adds the Gauss–Newton terms of
+    /// the per-pixel residuals `r_p = residual(p, A_p)` whose Jacobian is `∂A_p/∂θ`
+    /// (e.g. `A_p − M_p`), each weighted by `weight`, to `out`:
+    /// `JᵀJ += w·Σ J_pJ_pᵀ`, `Jᵀr += w·Σ J_p r_p`, `cost += ½ w·Σ r_p²` over all pixels
+    /// (θ order `[ω, t, ls]`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_with_normal_equations(
+        &mut self,
+        mesh: &Mesh,
+        pose: &Pose,
+        camera: &Camera,
+        settings: &SoftSettings,
+        residual: impl Fn(usize, f64) -> f64,
+        weight: f64,
+        out: &mut NormalEquations,
+    ) -> Result<&SoftSilhouette> {
+        self.prepare(mesh, pose, camera, settings)?;
+        self.normal_equations_pass(residual, weight, out);
+        Ok(&self.silhouette)
+    }
+
+    /// [`SoftRasterizer::render_with_normal_equations`] for the geometry of the last
+    /// render and residuals given per pixel (`residual.len()` = pixel count).
     ///
     /// # Panics
     /// If `residual.len()` is not the silhouette's pixel count.
     pub fn accumulate_normal_equations(&mut self, residual: &[f64], weight: f64, out: &mut NormalEquations) {
-        let npx = self.silhouette.alpha.len();
-        assert_eq!(residual.len(), npx, "residual must have one value per pixel");
+        assert_eq!(
+            residual.len(),
+            self.silhouette.alpha.len(),
+            "residual must have one value per pixel"
+        );
+        self.normal_equations_pass(|p, _| residual[p], weight, out);
+    }
+
+    fn normal_equations_pass(&mut self, residual: impl Fn(usize, f64) -> f64, weight: f64, out: &mut NormalEquations) {
         self.vertex_pose_jacobians();
-        // One 9-vector slot per unsaturated pixel that some triangle reaches.
-        self.gn_slot.clear();
-        self.gn_slot.resize(npx, u32::MAX);
-        self.gn_rows.clear();
-        for (i, &t) in self.silhouette.transmittance.iter().enumerate() {
-            if t < 1.0 && t >= SATURATION {
-                self.gn_slot[i] = self.gn_rows.len() as u32;
-                self.gn_rows.push([0.0; POSE_DIM]);
-            }
-        }
-        let sil = &self.silhouette;
         let vj = &self.vertex_jac;
-        let (slot, rows) = (&self.gn_slot, &mut self.gn_rows);
-        for tri in &sil.tris {
-            let mj = [
-                &vj[tri.idx[0] as usize],
-                &vj[tri.idx[1] as usize],
-                &vj[tri.idx[2] as usize],
-            ];
-            for_each_pair(sil, tri, None, |i, da_dd2, ga, gb, k| {
-                let s = slot[i];
-                if s == u32::MAX {
-                    return;
+        let w = self.silhouette.width as usize;
+        let mut rows = [[0.0f64; POSE_DIM]; TILE * TILE];
+        let mut jtj = [[0.0f64; POSE_DIM]; POSE_DIM];
+        let mut jtr = [0.0f64; POSE_DIM];
+        self.silhouette.run_pass::<true>(|tile| {
+            for r in rows.iter_mut() {
+                *r = [0.0; POSE_DIM];
+            }
+            for rec in tile.records {
+                let t = tile.t[rec.px as usize];
+                if t < SATURATION {
+                    continue;
                 }
-                let (ma, mb) = (mj[k], mj[(k + 1) % 3]);
-                let (ax, ay, bx, by) = (ga.x * da_dd2, ga.y * da_dd2, gb.x * da_dd2, gb.y * da_dd2);
-                let row = &mut rows[s as usize];
+                let (ma, mb) = (&vj[rec.a as usize], &vj[rec.b as usize]);
+                let (ax, ay, bx, by) = (rec.ga.x * t, rec.ga.y * t, rec.gb.x * t, rec.gb.y * t);
+                let row = &mut rows[rec.px as usize];
                 for c in 0..POSE_DIM {
                     row[c] += ax * ma[0][c] + ay * ma[1][c] + bx * mb[0][c] + by * mb[1][c];
                 }
-            });
-        }
-        let mut cost = 0.0;
-        for (i, &r) in residual.iter().enumerate() {
-            cost += r * r;
-            let s = self.gn_slot[i];
-            if s == u32::MAX {
-                continue;
             }
-            let jr = &self.gn_rows[s as usize];
-            for a in 0..POSE_DIM {
-                out.jtr[a] += weight * jr[a] * r;
-                let wa = weight * jr[a];
-                for b in a..POSE_DIM {
-                    out.jtj[a][b] += wa * jr[b];
+            for ly in 0..tile.h {
+                for lx in 0..tile.w {
+                    let li = ly * TILE + lx;
+                    let t = tile.t[li];
+                    if !(SATURATION..1.0).contains(&t) {
+                        continue;
+                    }
+                    let jr = &rows[li];
+                    let rp = residual((tile.y0 + ly) * w + tile.x0 + lx, 1.0 - t);
+                    for a in 0..POSE_DIM {
+                        jtr[a] += jr[a] * rp;
+                        for b in a..POSE_DIM {
+                            jtj[a][b] += jr[a] * jr[b];
+                        }
+                    }
                 }
             }
-        }
+        });
+        let cost: f64 = self
+            .silhouette
+            .alpha
+            .iter()
+            .enumerate()
+            .map(|(p, &a)| {
+                let r = residual(p, a);
+                r * r
+            })
+            .sum();
         for a in 0..POSE_DIM {
-            for b in 0..a {
-                // Fill the lower triangle from the upper one accumulated above.
-                out.jtj[a][b] = out.jtj[b][a];
+            out.jtr[a] += weight * jtr[a];
+            for b in 0..POSE_DIM {
+                out.jtj[a][b] += weight * if b >= a { jtj[a][b] } else { jtj[b][a] };
             }
         }
         out.cost += 0.5 * weight * cost;
+    }
+}
+
+#[cfg(test)]
+mod bench_tmp {
+    use super::*;
+    #[test]
+    fn bench_tmp() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/pytorch3d-case1/scene128/");
+        let text = std::fs::read_to_string(format!("{dir}scene.json")).unwrap();
+        let res = |rel: &str| std::fs::read(format!("{dir}{rel}")).ok();
+        let scene = crate::load_scene("scene.json", &text, &res).unwrap();
+        let init = Pose::from_json_str(&std::fs::read_to_string(format!("{dir}init_pose.json")).unwrap(), "x").unwrap();
+        let s = SoftSettings::from_ndc(1e-4, 128, 128);
+        let mut r = SoftRasterizer::new();
+        let n: usize = std::env::var("BENCH_N").ok().and_then(|v| v.parse().ok()).unwrap_or(20);
+        let mut best = [f64::MAX; 3];
+        for _ in 0..n {
+            let t0 = std::time::Instant::now();
+            for v in &scene.views {
+                r.render(&scene.mesh, &init, &v.camera, &s).unwrap();
+            }
+            best[0] = best[0].min(t0.elapsed().as_secs_f64());
+            let t0 = std::time::Instant::now();
+            for v in &scene.views {
+                let m = &v.mask.data;
+                r.render_with_gradients(&scene.mesh, &init, &v.camera, &s, |p| [1.0, m[p] as f64, 0.5]).unwrap();
+            }
+            best[1] = best[1].min(t0.elapsed().as_secs_f64());
+            let t0 = std::time::Instant::now();
+            let mut ne = NormalEquations::default();
+            for v in &scene.views {
+                let m = &v.mask.data;
+                r.render_with_normal_equations(&scene.mesh, &init, &v.camera, &s, |p, a| a - m[p] as f64, 1.0, &mut ne).unwrap();
+            }
+            best[2] = best[2].min(t0.elapsed().as_secs_f64());
+        }
+        println!("BENCH forward {:.2} ms fused {:.2} ms gn {:.2} ms", best[0] * 1e3, best[1] * 1e3, best[2] * 1e3);
     }
 }

@@ -1,0 +1,277 @@
+// End-to-end test of the web page (www/): playwright-core drives Debian's Chromium
+// against scripts/serve.mjs on a free port. Needs www/pkg/ (scripts/build-wasm.sh).
+//
+//   node tests/e2e/page.test.mjs        # prints one line per test, then "N passed, N failed"
+//
+// Artifacts (screenshot of the converged page, the downloaded result) go to
+// target/e2e/ (or $E2E_ARTIFACTS). Timings are printed, never asserted.
+import { chromium } from 'playwright-core';
+import { spawn } from 'node:child_process';
+import { existsSync, mkdirSync, readFileSync, readdirSync, statSync } from 'node:fs';
+import { dirname, join, relative } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import assert from 'node:assert/strict';
+
+const root = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
+const artifacts = process.env.E2E_ARTIFACTS ?? join(root, 'target', 'e2e');
+const CONVERGE_MS = 300_000; // generous: a limit for hangs, not a benchmark
+mkdirSync(artifacts, { recursive: true });
+if (!existsSync(join(root, 'www', 'pkg', 'localisebot_bg.wasm'))) {
+  console.error('www/pkg/ is missing: run scripts/build-wasm.sh first');
+  process.exit(1);
+}
+
+// ---- server and browser ----------------------------------------------------------
+function startServer() {
+  const proc = spawn(process.execPath, [join(root, 'scripts', 'serve.mjs'), '--port', '0'], {
+    stdio: ['ignore', 'pipe', 'inherit'],
+  });
+  return new Promise((ok, fail) => {
+    let out = '';
+    proc.stdout.on('data', (d) => {
+      out += d;
+      const m = out.match(/at (http:\/\/\S+)/);
+      if (m) ok({ proc, url: m[1] });
+    });
+    proc.on('exit', (code) => fail(new Error(`server exited (${code}): ${out}`)));
+  });
+}
+
+const server = await startServer();
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium',
+  headless: true,
+  args: ['--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage', '--disable-quic',
+    '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'],
+});
+
+async function openPage() {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 900 }, acceptDownloads: true });
+  const page = await context.newPage();
+  page.problems = [];
+  page.on('pageerror', (e) => page.problems.push(`page error: ${e.message}`));
+  page.on('console', (m) => m.type() === 'error' && page.problems.push(`console error: ${m.text()}`));
+  await page.goto(server.url);
+  return page;
+}
+
+const byId = (page, id) => page.getByTestId(id);
+const status = (page) => byId(page, 'status').textContent();
+
+// Waits for the start button to be usable (a scene is loaded), or fails with the page's error.
+async function waitLoaded(page) {
+  await page.waitForFunction(
+    () => !document.querySelector('[data-testid=start]').disabled || !document.querySelector('[data-testid=error]').hidden,
+    null,
+    { timeout: 60_000 },
+  );
+  const error = byId(page, 'error');
+  if (await error.isVisible()) throw new Error(`the page shows an error: ${await error.textContent()}`);
+}
+
+// Clicks Start and waits for "converged"; returns the timings seen from outside.
+async function fitToConvergence(page) {
+  await page.evaluate(() => {
+    window.__frames = 0;
+    const tick = () => {
+      window.__frames++;
+      requestAnimationFrame(tick);
+    };
+    requestAnimationFrame(tick);
+  });
+  const paints0 = Number((await byId(page, 'status').getAttribute('data-paints')) ?? 0);
+  const t0 = Date.now();
+  await byId(page, 'start').click();
+  await page.waitForFunction(
+    () => document.querySelector('[data-testid=status]').textContent.includes('converged') ||
+      !document.querySelector('[data-testid=error]').hidden,
+    null,
+    { timeout: CONVERGE_MS, polling: 20 },
+  );
+  const wall = (Date.now() - t0) / 1000;
+  const error = byId(page, 'error');
+  if (await error.isVisible()) throw new Error(`the page shows an error: ${await error.textContent()}`);
+  const paints = Number(await byId(page, 'status').getAttribute('data-paints')) - paints0;
+  const frames = await page.evaluate(() => window.__frames);
+  const text = await status(page);
+  return { wall, paintsPerSecond: paints / wall, framesPerSecond: frames / wall, status: text };
+}
+
+async function ious(page) {
+  return (await byId(page, 'view-iou').allTextContents()).map((t) => {
+    assert.match(t, /^\d\.\d{3}$/, `view-iou text '${t}' is not an IoU with 3 decimals`);
+    return Number(t);
+  });
+}
+
+// Per canvas: how many pixels differ from its first pixel, and how many are in the
+// overlay's contour colours.
+function canvasStats(page) {
+  return page.evaluate(() =>
+    [...document.querySelectorAll('canvas')].map((c) => {
+      const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      let varied = 0, magenta = 0, green = 0, ink = 0;
+      for (let i = 0; i < d.length; i += 4) {
+        if (d[i] !== d[0] || d[i + 1] !== d[1] || d[i + 2] !== d[2] || d[i + 3] !== d[3]) varied++;
+        if (d[i] === 255 && d[i + 1] === 0 && d[i + 2] === 255) magenta++;
+        if (d[i] === 0 && d[i + 1] === 255 && d[i + 2] === 0) green++;
+        if (d[i + 3] > 0) ink++;
+      }
+      return { id: c.id, pixels: d.length / 4, varied, magenta, green, ink };
+    }),
+  );
+}
+
+// Files for setInputFiles from a folder: bare names (as a file chooser gives them).
+function folderFiles(dir) {
+  const out = [];
+  const walk = (d) => {
+    for (const name of readdirSync(d)) {
+      const p = join(d, name);
+      if (statSync(p).isDirectory()) walk(p);
+      else out.push({ name, mimeType: 'application/octet-stream', buffer: readFileSync(p), rel: relative(dir, p) });
+    }
+  };
+  walk(dir);
+  return out;
+}
+const upload = (page, files) => byId(page, 'file-input').setInputFiles(files.map(({ name, mimeType, buffer }) => ({ name, mimeType, buffer })));
+
+// ---- tests ---------------------------------------------------------------------------
+const tests = [];
+const test = (name, fn) => tests.push({ name, fn });
+
+test('example: Load example, Start, converged, every view IoU >= 0.95, canvases drawn, result downloads', async () => {
+  const page = await openPage();
+  await byId(page, 'load-example').click();
+  await waitLoaded(page);
+  assert.equal(await byId(page, 'view-iou').count(), 4);
+  const t = await fitToConvergence(page);
+  const values = await ious(page);
+  assert.equal(values.length, 4);
+  for (const v of values) assert.ok(v >= 0.95, `view IoU ${v} < 0.95 (all: ${values})`);
+  const shot = join(artifacts, 'converged.png');
+  await page.screenshot({ path: shot, fullPage: true });
+  assert.ok(statSync(shot).size > 20_000, 'the screenshot is suspiciously small');
+  const stats = await canvasStats(page);
+  const viewCanvases = stats.filter((s) => s.id !== 'loss');
+  assert.equal(viewCanvases.length, 4);
+  for (const s of viewCanvases) {
+    assert.ok(s.varied > s.pixels * 0.05, `a view canvas is (nearly) uniform: ${JSON.stringify(s)}`);
+    assert.ok(s.magenta > 50, `no rendered contour drawn: ${JSON.stringify(s)}`);
+  }
+  const loss = stats.find((s) => s.id === 'loss');
+  assert.ok(loss.ink > 100, `the loss curve is blank: ${JSON.stringify(loss)}`);
+  const pose = await page.locator('#pose-q').textContent();
+  assert.equal(pose.trim().split(/\s+/).length, 4, `quaternion not shown: '${pose}'`);
+
+  const [download] = await Promise.all([page.waitForEvent('download'), byId(page, 'download').click()]);
+  const saved = join(artifacts, 'result.json');
+  await download.saveAs(saved);
+  const result = JSON.parse(readFileSync(saved, 'utf8'));
+  assert.equal(result.views.length, 4);
+  assert.ok(result.mean_iou >= 0.95, `result mean IoU ${result.mean_iou}`);
+  assert.equal(result.pose.quaternion.length, 4);
+  assert.equal(result.matrix.length, 4);
+  assert.ok(result.errors && result.errors.rotation_deg < 5, `rotation error ${result.errors?.rotation_deg}°`);
+  assert.deepEqual(page.problems, []);
+  console.log(`  status: ${t.status}`);
+  console.log(`  benchmark: converged from no initial pose in ${t.wall.toFixed(2)} s wall (target < 3 s)`);
+  console.log(`  benchmark: ${t.paintsPerSecond.toFixed(1)} canvas repaints/s while fitting (target >= 10), ` +
+    `${t.framesPerSecond.toFixed(1)} animation frames/s on the page`);
+  console.log(`  screenshot: ${relative(root, shot)}, result: ${relative(root, saved)}`);
+  await page.context().close();
+});
+
+test('file input: a .gltf + .bin scene (flat file names) converges', async () => {
+  const page = await openPage();
+  const files = folderFiles(join(root, 'tests', 'fixtures', 'scenes', 'avocado-3view'));
+  await upload(page, files);
+  await waitLoaded(page);
+  assert.equal(await byId(page, 'view-iou').count(), 3);
+  const t = await fitToConvergence(page);
+  for (const v of await ious(page)) assert.ok(v >= 0.95, `view IoU ${v} < 0.95`);
+  assert.deepEqual(page.problems, []);
+  console.log(`  status: ${t.status} (${t.wall.toFixed(2)} s wall)`);
+  await page.context().close();
+});
+
+test('file input: per-view camera JSON, masks and images of the same names; Step, Pause, Reset', async () => {
+  const page = await openPage();
+  const ex = join(root, 'www', 'example');
+  const scene = JSON.parse(readFileSync(join(ex, 'scene.json'), 'utf8'));
+  const files = [{ name: scene.mesh, mimeType: 'model/gltf-binary', buffer: readFileSync(join(ex, scene.mesh)) }];
+  for (const v of scene.views) {
+    files.push({ name: `${v.name}.json`, mimeType: 'application/json', buffer: Buffer.from(JSON.stringify(v.camera)) });
+    // A mask and an image both called NAME.png: told apart by their content.
+    files.push({ name: `${v.name}.png`, mimeType: 'image/png', buffer: readFileSync(join(ex, v.image)) });
+    files.push({ name: `${v.name}.png`, mimeType: 'image/png', buffer: readFileSync(join(ex, v.mask)) });
+  }
+  await upload(page, files);
+  await waitLoaded(page);
+  assert.deepEqual(await page.locator('.view .name').allTextContents(), scene.views.map((v) => v.name));
+  await byId(page, 'step').click();
+  await page.waitForFunction(() => /search: [1-9]/.test(document.querySelector('[data-testid=status]').textContent));
+  await byId(page, 'start').click();
+  await page.waitForTimeout(300);
+  await byId(page, 'pause').click();
+  await page.waitForFunction(() => document.querySelector('[data-testid=status]').textContent.startsWith('paused'));
+  await byId(page, 'reset').click();
+  await page.waitForFunction(() => document.querySelector('[data-testid=status]').textContent.startsWith('ready'));
+  const stats = await canvasStats(page);
+  for (const s of stats.filter((s) => s.id !== 'loss')) {
+    assert.ok(s.varied > s.pixels * 0.05, 'the image is shown, not only the mask');
+    assert.ok(s.green > 50, 'the mask outline is drawn');
+  }
+  assert.deepEqual(page.problems, []);
+  await page.context().close();
+});
+
+test('errors: a malformed .glb, alone or named by a scene, shows a specific error', async () => {
+  const page = await openPage();
+  const broken = { name: 'broken.glb', mimeType: 'model/gltf-binary', buffer: Buffer.from('glTF\x02\x00\x00\x00\x10\x00\x00\x00garbage!') };
+  await upload(page, [broken]);
+  const error = byId(page, 'error');
+  await error.waitFor({ state: 'visible' });
+  assert.match(await error.textContent(), /broken\.glb/);
+
+  const ex = join(root, 'www', 'example');
+  const files = folderFiles(ex).filter((f) => !f.name.endsWith('.glb'));
+  const scene = JSON.parse(readFileSync(join(ex, 'scene.json'), 'utf8'));
+  await upload(page, [...files, { ...broken, name: scene.mesh }]);
+  await page.waitForFunction((name) => document.querySelector('[data-testid=error]').textContent.includes(name), scene.mesh);
+  assert.match(await error.textContent(), /mesh/);
+  assert.ok(await error.isVisible());
+  assert.ok(await byId(page, 'start').isDisabled(), 'nothing to start after a failed load');
+
+  // A mask of the wrong size names the view and the file.
+  const small = folderFiles(join(root, 'tests', 'fixtures', 'scenes', 'avocado-3view')).find((f) => f.rel.startsWith('masks'));
+  await upload(page, [...files.filter((f) => f.rel !== join('masks', 'view1.png')), { ...small, name: 'view1.png' }, folderFiles(ex).find((f) => f.name.endsWith('.glb'))]);
+  await page.waitForFunction(() => document.querySelector('[data-testid=error]').textContent.includes('view1'));
+  assert.match(await error.textContent(), /view 'view1': mask .* is 240×200 but the camera is 256×256/);
+
+  // A good scene afterwards clears the error.
+  await byId(page, 'load-example').click();
+  await waitLoaded(page);
+  assert.ok(await error.isHidden());
+  await page.context().close();
+});
+
+// ---- run ---------------------------------------------------------------------------------
+let passed = 0;
+let failed = 0;
+for (const { name, fn } of tests) {
+  const t0 = Date.now();
+  try {
+    await fn();
+    passed++;
+    console.log(`ok - ${name} (${((Date.now() - t0) / 1000).toFixed(1)} s)`);
+  } catch (e) {
+    failed++;
+    console.log(`FAIL - ${name}\n  ${e.stack ?? e}`);
+  }
+}
+await browser.close();
+server.proc.kill();
+console.log(`${passed} passed, ${failed} failed`);
+process.exit(failed ? 1 : 0);
