@@ -10,10 +10,11 @@ use crate::mesh::Mesh;
 use crate::metrics;
 use crate::optim::adam::{Adam, AdamSettings};
 use crate::optim::search::{self, Candidate, LowResView, SearchSettings};
+use crate::optim::lm::{self, Free, Lm};
 use crate::optim::{init, params};
 use crate::pose::Pose;
 use crate::raster::hard;
-use crate::refine::{RefineTarget, StageSettings};
+use crate::refine::{Optimiser, RefineTarget, StageSettings};
 use crate::view::View;
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
@@ -45,7 +46,8 @@ pub struct FitSettings {
     pub lambda_contour: f64,
     /// How the scale is fitted.
     pub scale_mode: ScaleMode,
-    /// Converged when the loss improved by less than this (relative) over 10 iterations of the last stage.
+    /// A stage ends for a candidate when its best loss improved by less than this
+    /// (relative) over 5 iterations (default 1e-3); in the last stage that is convergence.
     pub tolerance: f64,
 }
 
@@ -58,7 +60,7 @@ impl Default for FitSettings {
             lambda_iou: 1.0,
             lambda_contour: 0.1,
             scale_mode: ScaleMode::Anisotropic,
-            tolerance: 1e-4,
+            tolerance: 1e-3,
         }
     }
 }
@@ -140,6 +142,7 @@ pub struct Progress {
 struct Track {
     pose: Pose,
     adam: Adam,
+    lm: Lm,
     best_pose: Pose,
     best_loss: f64,
     since_best: usize,
@@ -153,6 +156,7 @@ impl Track {
         Track {
             pose,
             adam: Adam::new(),
+            lm: Lm::new(),
             best_pose: pose,
             best_loss: f64::INFINITY,
             since_best: 0,
@@ -187,6 +191,18 @@ pub struct Estimator {
     iterations: usize,
     last_loss: f64,
     termination: Option<Termination>,
+}
+
+/// Appends a loss to a track's history and keeps its best pose.
+fn record(t: &mut Track, loss: f64) {
+    t.history.push(loss);
+    if loss < t.best_loss {
+        t.best_loss = loss;
+        t.best_pose = t.pose;
+        t.since_best = 0;
+    } else {
+        t.since_best += 1;
+    }
 }
 
 /// Search candidates scored per step.
@@ -362,34 +378,47 @@ impl Estimator {
         let last_stage = self.stage + 1 == self.settings.stages.len();
         let target = self.target.as_mut().expect("a refinement target exists in the refine phase");
         let t = &mut self.tracks[self.current];
-        let (loss, grad) = target.loss_and_gradient(&self.mesh, &t.pose);
+        let length = self.radius * t.pose.scale.max_element();
+        let loss = match stage.optimiser {
+            Optimiser::Adam => {
+                let (loss, grad) = target.loss_and_gradient(&self.mesh, &t.pose);
+                let frac = self.iter_in_stage as f64 / stage.iterations.max(1) as f64;
+                let lr = stage.lr_start * (stage.lr_end / stage.lr_start).powf(frac);
+                let mut g = params::scale_gradient(&grad, length);
+                match self.settings.scale_mode {
+                    ScaleMode::Fixed => g[6..9].iter_mut().for_each(|v| *v = 0.0),
+                    ScaleMode::Isotropic => params::isotropic_scale(&mut g),
+                    ScaleMode::Anisotropic => {}
+                }
+                let d = t.adam.update(&g, &self.settings.adam, lr);
+                record(t, loss);
+                t.pose = params::apply(&t.pose, &d, length);
+                loss
+            }
+            Optimiser::LevenbergMarquardt => {
+                let ne = target.normal_equations(&self.mesh, &t.pose);
+                let loss = 2.0 * ne.cost;
+                record(t, loss);
+                let free = match self.settings.scale_mode {
+                    ScaleMode::Fixed => Free::NoScale,
+                    ScaleMode::Isotropic => Free::IsotropicScale,
+                    ScaleMode::Anisotropic => Free::All,
+                };
+                let scaled = lm::scale_equations(&ne, length);
+                t.pose = t.lm.next_pose(t.pose, scaled, free, |p, d| params::apply(p, d, length));
+                loss
+            }
+        };
         self.iterations += 1;
         self.last_loss = loss;
-        t.history.push(loss);
-        if loss < t.best_loss {
-            t.best_loss = loss;
-            t.best_pose = t.pose;
-            t.since_best = 0;
-        } else {
-            t.since_best += 1;
-        }
-        let frac = self.iter_in_stage as f64 / stage.iterations.max(1) as f64;
-        let lr = stage.lr_start * (stage.lr_end / stage.lr_start).powf(frac);
-        let mut g = params::scale_gradient(&grad, self.radius * t.pose.scale.max_element());
-        match self.settings.scale_mode {
-            ScaleMode::Fixed => g[6..9].iter_mut().for_each(|v| *v = 0.0),
-            ScaleMode::Isotropic => params::isotropic_scale(&mut g),
-            ScaleMode::Anisotropic => {}
-        }
-        let d = t.adam.update(&g, &self.settings.adam, lr);
-        t.pose = params::apply(&t.pose, &d, self.radius * t.pose.scale.max_element());
         self.iter_in_stage += 1;
-        // Convergence: in the last stage, a flat loss over 10 iterations.
+        // Convergence: the best loss improved by less than the tolerance over the
+        // last 5 iterations (any stage; in the last one it ends the fit).
         let n = t.history.len();
-        if last_stage && self.iter_in_stage >= 15 && n > 10 {
-            let old = t.history[n - 11];
-            if (old - loss).abs() <= self.settings.tolerance * old.abs().max(1e-12) {
-                t.converged = true;
+        if self.iter_in_stage >= 6 && n > 5 {
+            let old = t.history[..n - 5].iter().rev().take(self.iter_in_stage - 5).fold(f64::INFINITY, |a, &b| a.min(b));
+            if old.is_finite() && old - t.best_loss <= self.settings.tolerance * old.abs().max(1e-12) {
+                t.converged = last_stage;
                 t.done_in_stage = true;
             }
         }
@@ -427,6 +456,7 @@ impl Estimator {
             self.current = 0;
             for t in &mut self.tracks {
                 t.adam = Adam::new();
+                t.lm = Lm::new();
                 t.best_loss = f64::INFINITY;
                 t.since_best = 0;
                 t.done_in_stage = false;

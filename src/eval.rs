@@ -222,3 +222,105 @@ pub fn report_markdown(summary: &Summary, outcomes: &[SceneOutcome]) -> String {
     }
     s
 }
+
+/// Whether the mesh looks the same after a half or quarter turn about one of its
+/// bounding box's axes (through its centre): every vertex then has a rotated vertex
+/// within 2 % of the diameter. Such objects (boxes, cans, bowls) are scored by ADD-S.
+pub fn is_symmetric(mesh: &crate::mesh::Mesh) -> bool {
+    use glam::{DMat3, DVec3};
+    use kiddo::{KdTree, SquaredEuclidean};
+    let Some(b) = mesh.bounds() else { return false };
+    let pts = mesh.used_points();
+    if pts.len() < 3 {
+        return false;
+    }
+    let c = b.centre();
+    let tol = 0.02 * b.size().length();
+    let mut tree: KdTree<f64, 3> = KdTree::new();
+    for (i, p) in pts.iter().enumerate() {
+        tree.add(&(*p - c).to_array(), i as u64);
+    }
+    let turns = [
+        DMat3::from_rotation_x(std::f64::consts::PI),
+        DMat3::from_rotation_y(std::f64::consts::PI),
+        DMat3::from_rotation_z(std::f64::consts::PI),
+        DMat3::from_rotation_x(std::f64::consts::FRAC_PI_2),
+        DMat3::from_rotation_y(std::f64::consts::FRAC_PI_2),
+        DMat3::from_rotation_z(std::f64::consts::FRAC_PI_2),
+    ];
+    turns.iter().any(|r| {
+        pts.iter().all(|p| {
+            let q: DVec3 = *r * (*p - c);
+            tree.nearest_one::<SquaredEuclidean>(&q.to_array()).distance <= tol * tol
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimator::Termination;
+    use crate::metrics::PoseErrors;
+    use crate::result::{PoseOut, ViewResult};
+
+    fn outcome(ious: &[f64], areas: &[usize], add_rel: f64) -> SceneOutcome {
+        let errors = PoseErrors {
+            rotation_deg: 1.0,
+            translation: 0.01,
+            scale: 0.005,
+            scale_mean: 0.004,
+            add: add_rel,
+            add_s: add_rel,
+            diameter: 1.0,
+            add_rel,
+            add_s_rel: add_rel,
+        };
+        SceneOutcome {
+            name: "s".into(),
+            views: ious.len(),
+            symmetric: false,
+            result: FitResult {
+                pose: PoseOut::from_pose(&crate::Pose::IDENTITY),
+                matrix: [[0.0; 4]; 4],
+                views: ious.iter().map(|&iou| ViewResult { name: "v".into(), iou, hausdorff_px: 1.0 }).collect(),
+                mean_iou: ious.iter().sum::<f64>() / ious.len() as f64,
+                loss_history: vec![],
+                iterations: 1,
+                termination: Some(Termination::Converged),
+                seconds: 1.0,
+                errors: Some(errors),
+            },
+            predicted_area: areas.to_vec(),
+            grasps_correct: 1,
+            grasps_total: 2,
+            loss_by_views: vec![0.3, 0.1],
+            add_rel_by_views: vec![0.2, 0.01],
+        }
+    }
+
+    #[test]
+    fn precision_recall_counts() {
+        // Views: IoU 0.9 (TP at all), 0.6 (TP at .25/.5), 0.3 with an empty render (no prediction).
+        let o = vec![outcome(&[0.9, 0.6, 0.3], &[100, 100, 0], 0.05), outcome(&[0.2], &[50], 0.5)];
+        let s = summarise(&o);
+        let at = |t: f64| s.prf.iter().find(|r| r.threshold == t).unwrap().clone();
+        let r = at(0.25);
+        assert_eq!((r.tp, r.predictions, r.ground_truths), (2, 3, 4));
+        assert!((r.precision - 2.0 / 3.0).abs() < 1e-12 && (r.recall - 0.5).abs() < 1e-12);
+        assert!((r.f1 - 2.0 * (2.0 / 3.0) * 0.5 / (2.0 / 3.0 + 0.5)).abs() < 1e-12);
+        assert_eq!(at(0.75).tp, 1);
+        assert_eq!(s.add_accuracy, 0.5);
+        assert_eq!(s.grasp_accuracy, Some(0.5));
+        assert_eq!(s.loss_by_views[0], (1, 0.3, 2));
+        let md = report_markdown(&s, &o);
+        assert!(md.contains("| 0.25 | 2 | 3 | 4 | 0.667 | 0.500 |"), "{md}");
+    }
+
+    #[test]
+    fn symmetry_of_box_and_blob() {
+        let bytes = include_bytes!("../tests/fixtures/gltf/Box/glTF-Binary/Box.glb");
+        let cube = crate::io::load_mesh("Box.glb", bytes, &crate::io::no_files).unwrap();
+        assert!(is_symmetric(&cube));
+        assert!(!is_symmetric(&crate::synth::blob_mesh(12, 25)));
+    }
+}

@@ -22,6 +22,7 @@ pub mod camera;
 pub mod error;
 pub mod estimator;
 pub mod eval;
+pub mod grasp;
 pub mod io;
 pub mod loss;
 pub mod mask;

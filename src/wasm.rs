@@ -76,8 +76,10 @@ export interface FitResult {
 }
 "#;
 
+/// Logs a Rust panic (a bug) to the console with its message; runs by itself when the
+/// module loads.
 #[wasm_bindgen(start)]
-fn start() {
+pub fn install_panic_hook() {
     console_error_panic_hook::set_once();
 }
 
@@ -169,6 +171,11 @@ impl FileSet {
     /// same ignoring case. Several files at the first level that matches are told
     /// apart by `role`; `Err` names them when that fails. `Ok(None)`: no such file.
     pub fn find(&self, wanted: &str, role: FileRole) -> std::result::Result<Option<&[u8]>, String> {
+        Ok(self.find_entry(wanted, role)?.map(|(_, bytes)| bytes.as_slice()))
+    }
+
+    /// As [`find`](Self::find), the matching (path, bytes) entry.
+    fn find_entry(&self, wanted: &str, role: FileRole) -> std::result::Result<Option<&(String, Vec<u8>)>, String> {
         let w = normalise(wanted);
         let suffix = |a: &str, b: &str| a.len() > b.len() && a.ends_with(b) && a[..a.len() - b.len()].ends_with('/');
         let (wl, lower) = (w.to_ascii_lowercase(), |f: &str| f.to_ascii_lowercase());
@@ -179,7 +186,7 @@ impl FileSet {
         for matches in levels {
             let hits: Vec<&(String, Vec<u8>)> = self.files.iter().filter(|(p, _)| matches(p)).collect();
             if hits.len() == 1 {
-                return Ok(Some(&hits[0].1));
+                return Ok(Some(hits[0]));
             }
             if hits.len() > 1 {
                 let keep: Vec<_> = match role {
@@ -188,7 +195,7 @@ impl FileSet {
                     FileRole::Other => vec![],
                 };
                 if keep.len() == 1 {
-                    return Ok(Some(&keep[0].1));
+                    return Ok(Some(keep[0]));
                 }
                 let names: Vec<&str> = hits.iter().map(|f| f.0.as_str()).collect();
                 return Err(format!(
@@ -203,10 +210,54 @@ impl FileSet {
     }
 
     /// The scene `scene_file` (JSON `text`) with the mesh, masks and images it names
-    /// taken from this set (paths joined onto the scene file's folder, then [`find`](Self::find)).
-    pub fn load_scene(&self, scene_file: &str, text: &str) -> Result<Scene> {
-        let json = SceneJson::parse(text, scene_file)?;
+    /// taken from this set (paths joined onto the scene file's folder, then
+    /// [`find`](Self::find), as a mask or an image), and warnings: an image not in
+    /// the set (or only as the view's mask) is left out, for images are only shown.
+    pub fn load_scene(&self, scene_file: &str, text: &str) -> Result<(Scene, Vec<String>)> {
+        let mut json = SceneJson::parse(text, scene_file)?;
         let dir = parent_dir(scene_file);
+        let missing = |path: String| Error::MissingFile {
+            file: path,
+            referrer: scene_file.into(),
+        };
+        // Every mask and image found first, by role; `fetch` then serves them by the
+        // path written in the scene (an image written as its mask's path gets "#image").
+        let mut found: Vec<(String, &[u8])> = Vec::new();
+        let mut warnings = Vec::new();
+        for v in &mut json.views {
+            let mask = self
+                .find_entry(&join(dir, &v.mask), FileRole::Mask)
+                .map_err(|problem| Error::Mask {
+                    view: v.name.clone(),
+                    file: v.mask.clone(),
+                    problem,
+                })?
+                .ok_or_else(|| missing(join(dir, &v.mask)))?;
+            found.push((v.mask.clone(), &mask.1));
+            let Some(image) = v.image.take() else { continue };
+            match self.find_entry(&join(dir, &image), FileRole::Image) {
+                Ok(Some(entry)) if !std::ptr::eq(entry, mask) => {
+                    let key = if image == v.mask {
+                        format!("{image}#image")
+                    } else {
+                        image
+                    };
+                    found.push((key.clone(), &entry.1));
+                    v.image = Some(key);
+                }
+                Ok(_) => warnings.push(format!(
+                    "view '{}': image '{image}' not given: showing the mask",
+                    v.name
+                )),
+                Err(problem) => {
+                    return Err(Error::Image {
+                        view: v.name.clone(),
+                        file: image,
+                        problem,
+                    })
+                }
+            }
+        }
         let mesh_path = join(dir, &json.mesh);
         let mesh_bytes = self
             .find(&mesh_path, FileRole::Other)
@@ -214,10 +265,7 @@ impl FileSet {
                 file: mesh_path.clone(),
                 problem,
             })?
-            .ok_or_else(|| Error::MissingFile {
-                file: mesh_path.clone(),
-                referrer: scene_file.into(),
-            })?;
+            .ok_or_else(|| missing(mesh_path.clone()))?;
         let mesh_dir = parent_dir(&mesh_path);
         let extra = |uri: &str| {
             self.find(&join(mesh_dir, uri), FileRole::Other)
@@ -226,41 +274,11 @@ impl FileSet {
                 .map(<[u8]>::to_vec)
         };
         let mesh = load_mesh(&mesh_path, mesh_bytes, &extra)?;
-        let views = json.views.clone();
         let fetch = |rel: &str| -> Result<Vec<u8>> {
-            let as_mask = views.iter().find(|v| v.mask == rel);
-            let as_image = views.iter().find(|v| v.image.as_deref() == Some(rel));
-            let role = match (as_mask, as_image) {
-                (Some(_), None) => FileRole::Mask,
-                (None, Some(_)) => FileRole::Image,
-                _ => FileRole::Other,
-            };
-            let path = join(dir, rel);
-            match self.find(&path, role) {
-                Ok(Some(bytes)) => Ok(bytes.to_vec()),
-                Ok(None) => Err(Error::MissingFile {
-                    file: path,
-                    referrer: scene_file.into(),
-                }),
-                Err(problem) => Err(match (as_mask, as_image) {
-                    (Some(v), _) => Error::Mask {
-                        view: v.name.clone(),
-                        file: rel.into(),
-                        problem,
-                    },
-                    (_, Some(v)) => Error::Image {
-                        view: v.name.clone(),
-                        file: rel.into(),
-                        problem,
-                    },
-                    _ => Error::MissingFile {
-                        file: format!("{path} ({problem})"),
-                        referrer: scene_file.into(),
-                    },
-                }),
-            }
+            let bytes = found.iter().find(|(p, _)| p == rel).map(|(_, b)| b.to_vec());
+            bytes.ok_or_else(|| missing(join(dir, rel)))
         };
-        scene_from_parts(scene_file, json, mesh, &fetch)
+        Ok((scene_from_parts(scene_file, json, mesh, &fetch)?, warnings))
     }
 }
 
@@ -463,6 +481,7 @@ pub struct Session {
     losses: Vec<f64>,
     iteration: usize,
     rendered: Option<Vec<Mask>>,
+    warnings: Vec<String>,
 }
 
 /// Progress as JavaScript sees it: the core's, plus the pose and full-resolution IoUs.
@@ -502,6 +521,7 @@ impl Session {
             losses: Vec::new(),
             iteration: 0,
             rendered: None,
+            warnings: Vec::new(),
         })
     }
 
@@ -563,13 +583,10 @@ impl Session {
     /// matched by path relative to the scene file, then by file name.
     #[wasm_bindgen(js_name = fromScene)]
     pub fn from_scene(scene_file: &str, scene_text: &str, files: &FileSet) -> Result<Session, JsError> {
-        let scene = files.load_scene(scene_file, scene_text)?;
-        Ok(Session::new(
-            scene.mesh,
-            scene.views,
-            scene.initial_pose,
-            scene.ground_truth_pose,
-        )?)
+        let (scene, warnings) = files.load_scene(scene_file, scene_text)?;
+        let mut session = Session::new(scene.mesh, scene.views, scene.initial_pose, scene.ground_truth_pose)?;
+        session.warnings = warnings;
+        Ok(session)
     }
 
     /// The number of views.
@@ -634,6 +651,11 @@ impl Session {
     pub fn progress(&mut self) -> Result<JsValue, JsError> {
         let p = self.est.progress();
         self.progress_out(&p)
+    }
+
+    /// What was left out when the session was made (images not given).
+    pub fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
     }
 
     /// Whether the fit has finished.

@@ -31,7 +31,7 @@ export function classify(files) {
     else if (PNG.test(f.path)) out.pngs.push(f);
     else if (JSON_FILE.test(f.path)) {
       const { text, value } = parseJson(f);
-      if (value && Array.isArray(value.views)) out.scenes.push({ file: f, text, value });
+      if (value && typeof value.mesh === 'string' && Array.isArray(value.views)) out.scenes.push({ file: f, text, value });
       else if (value && (value.camera || 'fx' in value)) out.cameras.push({ file: f, value });
       else out.ignored.push(f.path);
     } else out.ignored.push(f.path);

@@ -5,7 +5,7 @@ const $ = (id) => document.getElementById(id);
 const ui = {
   drop: $('drop'), input: $('file-input'), example: $('load-example'),
   start: $('start'), pause: $('pause'), step: $('step'), reset: $('reset'), download: $('download'),
-  status: $('status'), rate: $('rate'), error: $('error'), views: $('views'), loss: $('loss'),
+  status: $('status'), rate: $('rate'), error: $('error'), notice: $('notice'), views: $('views'), loss: $('loss'),
 };
 
 let worker = null;
@@ -28,6 +28,8 @@ function startWorker() {
 const handlers = {
   loaded(msg) {
     clearError();
+    ui.notice.textContent = msg.warnings.join('\n');
+    ui.notice.hidden = msg.warnings.length === 0;
     buildViews(msg.views);
     state = 'ready';
     updateButtons();
@@ -102,12 +104,13 @@ ui.input.addEventListener('change', () => {
   ui.input.value = '';
   sendFiles(list).catch((e) => showError(e.message));
 });
-ui.drop.addEventListener('dragover', (e) => {
+// Files dropped anywhere on the page are taken (rather than opened by the browser).
+window.addEventListener('dragover', (e) => {
   e.preventDefault();
   ui.drop.classList.add('over');
 });
-ui.drop.addEventListener('dragleave', () => ui.drop.classList.remove('over'));
-ui.drop.addEventListener('drop', (e) => {
+window.addEventListener('dragleave', (e) => e.relatedTarget === null && ui.drop.classList.remove('over'));
+window.addEventListener('drop', (e) => {
   e.preventDefault();
   ui.drop.classList.remove('over');
   dropped(e.dataTransfer).then(sendFiles).catch((err) => showError(err.message));

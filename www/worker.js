@@ -43,7 +43,7 @@ function load(files) {
   const next = Session.fromScene(plan.sceneFile, plan.sceneText, fileSet(files));
   session?.free();
   session = next;
-  post({ type: 'loaded', views: session.views(), source: plan.sceneFile });
+  post({ type: 'loaded', views: session.views(), warnings: session.warnings(), source: plan.sceneFile });
   frame();
 }
 

@@ -130,6 +130,7 @@ fn time_fwd_bwd(mesh: &Mesh, views: &[View], pose: &Pose, size: u32, sigma: f64,
         lr_end: 1.0,
         keep: 1,
         contour: false,
+        optimiser: localisebot::refine::Optimiser::Adam,
     };
     let mut target = RefineTarget::new(views, &stage, 1.0, 0.0);
     // A pose slightly off the truth, as during a fit.

@@ -8,6 +8,7 @@ use localisebot::estimator::{Estimator, FitSettings, Phase, ScaleMode};
 use localisebot::io::png::encode_rgba;
 use localisebot::optim::search::Sampling;
 use localisebot::overlay;
+use localisebot::refine::Optimiser;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -26,6 +27,9 @@ pub struct FitOptions {
     /// Weight λ2 of the contour (Hausdorff) loss.
     #[arg(long)]
     pub lambda_contour: Option<f64>,
+    /// Optimiser of the refinement stages: adam, or lm (Levenberg–Marquardt).
+    #[arg(long)]
+    pub optimiser: Option<String>,
     /// Scale: anisotropic (9-DoF), isotropic, or fixed (the CAD model is to scale).
     #[arg(long, default_value = "anisotropic")]
     pub scale: String,
@@ -53,6 +57,14 @@ impl FitOptions {
             "fixed" => ScaleMode::Fixed,
             o => return Err(format!("--scale: expected anisotropic, isotropic or fixed, got '{o}'")),
         };
+        if let Some(o) = &self.optimiser {
+            let o = match o.as_str() {
+                "adam" => Optimiser::Adam,
+                "lm" => Optimiser::LevenbergMarquardt,
+                o => return Err(format!("--optimiser: expected adam or lm, got '{o}'")),
+            };
+            s.stages.iter_mut().for_each(|st| st.optimiser = o);
+        }
         s.validate().map_err(|e| e.to_string())?;
         Ok(s)
     }

@@ -47,6 +47,7 @@ pub fn run(a: &LossArgs) -> CliResult {
         lr_end: 1.0,
         keep: 1,
         contour: a.lambda_contour > 0.0,
+        optimiser: localisebot::refine::Optimiser::Adam,
     };
     let mut target = RefineTarget::new(&scene.views, &stage, a.lambda_iou, a.lambda_contour);
     let per_view: Vec<_> = (0..target.view_count())

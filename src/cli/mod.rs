@@ -4,6 +4,7 @@
 mod bench;
 mod files;
 mod fit;
+mod import;
 mod info;
 mod loss;
 mod render;
@@ -35,6 +36,9 @@ enum Command {
     Loss(loss::LossArgs),
     /// Time the forward + backward pass and full fits (see BENCHMARKS.md).
     Bench(bench::BenchArgs),
+    /// Import a dataset folder (NeRF, BOP) as a scene folder.
+    #[command(subcommand)]
+    Import(import::ImportCommand),
     /// Draw overlays (mask outline and rendered contour over each view) for a pose.
     Render {
         /// The scene file.
@@ -56,6 +60,7 @@ pub fn main() -> i32 {
         Command::Synth(args) => synth::run(&args),
         Command::Fit(args) => fit::run(&args),
         Command::Loss(args) => loss::run(&args),
+        Command::Import(cmd) => import::run(&cmd),
         Command::Bench(args) => bench::run(&args),
         Command::Render { scene, pose, out } => render::run(&scene, &pose, &out),
     };

@@ -75,7 +75,7 @@ pub fn run(a: &SynthArgs) -> CliResult {
 
 /// Copies the mesh file, and a `.gltf`'s external buffers and images, into `out`.
 /// Returns the mesh's name relative to `out`.
-fn copy_mesh(mesh: &Path, out: &Path) -> CliResult<String> {
+pub(super) fn copy_mesh(mesh: &Path, out: &Path) -> CliResult<String> {
     let name = mesh.file_name().ok_or_else(|| format!("{}: not a file", mesh.display()))?.to_string_lossy().to_string();
     let bytes = read(mesh)?;
     write(&out.join(&name), &bytes)?;

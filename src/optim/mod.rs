@@ -3,5 +3,6 @@
 
 pub mod adam;
 pub mod init;
+pub mod lm;
 pub mod params;
 pub mod search;

@@ -27,7 +27,7 @@ pub enum Sampling {
 pub struct SearchSettings {
     /// Candidate rotations (default `Uniform(512)`).
     pub sampling: Sampling,
-    /// How many of the best distinct candidates to keep (default 4).
+    /// How many of the best distinct candidates to keep (default 8).
     pub keep: usize,
     /// Longest image side at which candidates are scored (default 64 px).
     pub resolution: u32,
@@ -41,7 +41,7 @@ impl Default for SearchSettings {
     fn default() -> Self {
         SearchSettings {
             sampling: Sampling::Uniform(512),
-            keep: 4,
+            keep: 8,
             resolution: 64,
             min_separation_deg: 30.0,
             refit_rounds: 2,

@@ -18,6 +18,9 @@
 //! wholly behind it are skipped. Polygons reaching past [`GUARD_BAND_PX`] are clipped
 //! in the image plane too. Intersection points are computed from the inside vertex
 //! of an edge, so neighbours sharing a clipped edge still share it exactly.
+//!
+//! Cost: each triangle yields one run of pixels per row it spans (see `span.rs`),
+//! filled as a byte range or as word masks; nothing is allocated per triangle.
 
 mod bits;
 mod span;
@@ -90,24 +93,27 @@ pub fn render_bits_into(proj: &Projected, triangles: &[[u32; 3]], camera: &Camer
     for_each_span(proj, triangles, camera, &mut |y, x0, x1| out.fill_span(y, x0, x1));
 }
 
-/// A convex polygon of at most 8 vertices (a triangle clipped by up to 5 planes).
+/// A convex polygon: a triangle clipped by up to 5 planes has at most 8 vertices;
+/// the spare room absorbs the extra crossings rounding could cause in a sliver.
 #[derive(Clone, Copy)]
 struct Poly<T> {
-    pts: [T; 8],
+    pts: [T; 16],
     n: usize,
 }
 
 impl<T: Copy + Default> Poly<T> {
     fn new() -> Self {
         Poly {
-            pts: [T::default(); 8],
+            pts: [T::default(); 16],
             n: 0,
         }
     }
     #[inline]
     fn push(&mut self, p: T) {
-        self.pts[self.n] = p;
-        self.n += 1;
+        if self.n < self.pts.len() {
+            self.pts[self.n] = p;
+            self.n += 1;
+        }
     }
     fn as_slice(&self) -> &[T] {
         &self.pts[..self.n]
@@ -212,7 +218,6 @@ fn clip_to_guard_band(poly: &Poly<DVec2>) -> Poly<DVec2> {
                 let (i, o, di, d_o) = if dp >= 0.0 { (p, q, dp, dq) } else { (q, p, dq, dp) };
                 let mut x = i + (o - i) * (di / (di - d_o));
                 x[axis] = sign * GUARD_BAND_PX;
-                x[1 - axis] = x[1 - axis].clamp(-GUARD_BAND_PX, GUARD_BAND_PX);
                 next.push(x);
             }
         }

@@ -353,3 +353,40 @@ mod bench_tmp {
         println!("BENCH forward {:.2} ms fused {:.2} ms gn {:.2} ms", best[0] * 1e3, best[1] * 1e3, best[2] * 1e3);
     }
 }
+
+#[cfg(test)]
+mod count_tmp {
+    use super::*;
+    #[test]
+    fn count_tmp() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/pytorch3d-case1/scene128/");
+        let text = std::fs::read_to_string(format!("{dir}scene.json")).unwrap();
+        let res = |rel: &str| std::fs::read(format!("{dir}{rel}")).ok();
+        let scene = crate::load_scene("scene.json", &text, &res).unwrap();
+        let init = Pose::from_json_str(&std::fs::read_to_string(format!("{dir}init_pose.json")).unwrap(), "x").unwrap();
+        let s = SoftSettings::from_ndc(1e-4, 128, 128);
+        let mut r = SoftRasterizer::new();
+        for v in &scene.views {
+            r.render(&scene.mesh, &init, &v.camera, &s).unwrap();
+            let sil = &r.silhouette;
+            let m = s.cutoff_sq().sqrt();
+            let (mut spans, mut chunks, mut px, mut entries) = (0, 0, 0, 0);
+            let b = &sil.bins;
+            for ty in 0..b.tiles_y { for tx in 0..b.tiles_x {
+                let ti = ty * b.tiles_x + tx;
+                for &k in &b.items[b.start[ti] as usize..b.start[ti+1] as usize] {
+                    entries += 1;
+                    let tri = &sil.tris[k as usize];
+                    let (x0, y0) = ((tx * TILE) as i32, (ty * TILE) as i32);
+                    for y in tri.y0.max(y0)..=tri.y1.min(y0 + 7) {
+                        if let Some((xa, xb)) = tri.span(y as f64, m, tri.x0.max(x0), tri.x1.min(x0 + 7)) {
+                            spans += 1; px += xb - xa + 1;
+                            chunks += (xb - x0) / 4 - (xa - x0) / 4 + 1;
+                        }
+                    }
+                }
+            }}
+            println!("COUNT {}: tris {} entries {entries} spans {spans} chunks {chunks} px {px}", v.name, sil.tris.len());
+        }
+    }
+}

@@ -13,9 +13,14 @@
 
 use crate::raster::soft::SATURATION;
 use glam::DVec2;
+use wide::{CmpGe, CmpGt, CmpLe, CmpLt};
+
+/// The lane types of the kernel.
+type F = wide::f64x2;
+type U = wide::u64x2;
 
 /// Tile side in pixels.
-pub(crate) const TILE: usize = 8;
+pub(crate) const TILE: usize = 16;
 
 /// One triangle ready for rasterisation: vertices, normalised edge functions
 /// `e_k(p) = n_k·p + c_k` (the signed distance to the line of edge k = v_k → v_{k+1},
@@ -24,10 +29,13 @@ pub(crate) const TILE: usize = 8;
 pub(crate) struct TriSetup {
     pub idx: [u32; 3],
     pub v: [DVec2; 3],
-    pub dir: [DVec2; 3],
-    pub inv_len2: [f64; 3],
+    /// Unit inward edge normals and offsets: `e_k(p) = n_k·p + c_k`.
     pub n: [DVec2; 3],
     pub c: [f64; 3],
+    /// The parameter of p's projection on edge k, `s_k(p) = (p − v_k)·(v_{k+1} − v_k) /
+    /// |v_{k+1} − v_k|² = sd_k·p + sc_k` (0 at v_k, 1 at v_{k+1}).
+    pub sd: [DVec2; 3],
+    pub sc: [f64; 3],
     /// 1 / n_k.x (0 for a horizontal edge).
     pub inv_nx: [f64; 3],
     pub x0: i32,
@@ -64,10 +72,10 @@ impl TriSetup {
         let mut t = TriSetup {
             idx,
             v,
-            dir: [DVec2::ZERO; 3],
-            inv_len2: [0.0; 3],
             n: [DVec2::ZERO; 3],
             c: [0.0; 3],
+            sd: [DVec2::ZERO; 3],
+            sc: [0.0; 3],
             inv_nx: [0.0; 3],
             x0,
             x1,
@@ -78,8 +86,8 @@ impl TriSetup {
             let a = v[k];
             let d = v[(k + 1) % 3] - a;
             let l2 = d.length_squared();
-            t.dir[k] = d;
-            t.inv_len2[k] = 1.0 / l2;
+            t.sd[k] = d / l2;
+            t.sc[k] = -a.dot(d) / l2;
             // cross(d, p − a) = d.x (p.y − a.y) − d.y (p.x − a.x), scaled to unit length.
             let nk = DVec2::new(-d.y, d.x) * (s / l2.sqrt());
             t.n[k] = nk;
@@ -92,7 +100,7 @@ impl TriSetup {
     /// Inclusive x range of row `y`, within `[lo0, hi0]` (non-negative integers), where
     /// every edge function is ≥ −m; `None` when empty.
     #[inline(always)]
-    fn span(&self, y: f64, m: f64, lo0: i32, hi0: i32) -> Option<(i32, i32)> {
+    pub(crate) fn span(&self, y: f64, m: f64, lo0: i32, hi0: i32) -> Option<(i32, i32)> {
         let mut lo = f64::NEG_INFINITY;
         let mut hi = f64::INFINITY;
         for k in 0..3 {
@@ -190,34 +198,6 @@ pub(crate) struct Tile<'a> {
     pub records: &'a [Record],
 }
 
-/// `e^{−z}` for `z ≥ 0`, to within a few ulps (range reduction by ln 2 and a
-/// degree-11 Taylor polynomial on |r| ≤ ln2/2: truncation error < 1e-14).
-#[inline(always)]
-pub(crate) fn exp_neg(z: f64) -> f64 {
-    const LOG2E: f64 = std::f64::consts::LOG2_E;
-    const LN2_HI: f64 = 6.931_471_803_691_238_164_9e-1;
-    const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
-    if !(z <= 708.0) {
-        return 0.0;
-    }
-    let k = (z * LOG2E + 0.5) as i64;
-    let kf = k as f64;
-    let r = (kf * LN2_HI - z) + kf * LN2_LO;
-    let mut p = 1.0 / 39_916_800.0;
-    p = p * r + 1.0 / 3_628_800.0;
-    p = p * r + 1.0 / 362_880.0;
-    p = p * r + 1.0 / 40_320.0;
-    p = p * r + 1.0 / 5_040.0;
-    p = p * r + 1.0 / 720.0;
-    p = p * r + 1.0 / 120.0;
-    p = p * r + 1.0 / 24.0;
-    p = p * r + 1.0 / 6.0;
-    p = p * r + 0.5;
-    p = p * r + 1.0;
-    p = p * r + 1.0;
-    p * f64::from_bits(((1023 - k) as u64) << 52)
-}
-
 /// Inputs of a tile pass.
 pub(crate) struct Pass<'a> {
     pub tris: &'a [TriSetup],
@@ -226,6 +206,160 @@ pub(crate) struct Pass<'a> {
     pub height: usize,
     pub sigma: f64,
     pub cutoff_sq: f64,
+}
+
+/// Lanes processed together (a row chunk of the tile; `TILE` is a multiple).
+const LANES: usize = 2;
+
+/// `e^{−z}` per lane for z ≥ 0, to within a few ulps: range reduction by ln 2 and a
+/// degree-11 Taylor polynomial on |r| ≤ ln2/2 (truncation error < 1e-14), branch-free.
+/// z is clamped to 708 (e^{−708} ≈ 3e-308).
+#[inline(always)]
+fn exp_neg_lanes(z: F) -> F {
+    const LOG2E: f64 = std::f64::consts::LOG2_E;
+    const LN2_HI: f64 = 6.931_471_803_691_238_164_9e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+    // Round to nearest by the 1.5·2^52 trick: the low bits of `kk` then hold k.
+    const MAGIC: f64 = 6_755_399_441_055_744.0;
+    const C: [f64; 12] = [
+        1.0 / 39_916_800.0,
+        1.0 / 3_628_800.0,
+        1.0 / 362_880.0,
+        1.0 / 40_320.0,
+        1.0 / 5_040.0,
+        1.0 / 720.0,
+        1.0 / 120.0,
+        1.0 / 24.0,
+        1.0 / 6.0,
+        0.5,
+        1.0,
+        1.0,
+    ];
+    let z = z.fast_min(F::splat(708.0));
+    let kk = z * LOG2E + MAGIC;
+    let kf = kk - MAGIC;
+    let r = (kf * LN2_HI - z) + kf * LN2_LO;
+    let mut p = F::splat(C[0]);
+    for c in &C[1..] {
+        p = p * r + *c;
+    }
+    // 2^−k: exponent field 1023 − k (k = low bits of kk, 0 ≤ k ≤ 1022).
+    let bits: U = bytemuck::cast(kk);
+    let scale = U::splat(1023u64 << 52) - (bits << 52u32);
+    p * bytemuck::cast::<U, F>(scale)
+}
+
+/// Per-row constants of one triangle.
+struct RowConsts {
+    y: f64,
+    /// `e_k = n_k.x·x + re_k`.
+    re: [f64; 3],
+    /// `s_k = sd_k.x·x + rs_k`.
+    rs: [f64; 3],
+    /// `(y − v_k.y)²`.
+    dy2: [f64; 3],
+}
+
+/// One chunk of `LANES` pixels of a tile row: multiplies the row's transmittance
+/// `row[base..base + LANES]` by `1 − D` for the lanes with `lo ≤ base + l ≤ hi`
+/// (pixel x = `xbase + l`) and, with `REC`, pushes their records.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn chunk<const REC: bool>(
+    tri: &TriSetup,
+    rc: &RowConsts,
+    row: &mut [f64],
+    li0: usize,
+    xbase: f64,
+    lo: usize,
+    hi: usize,
+    base: usize,
+    inv_sigma: f64,
+    m2: f64,
+    records: &mut Vec<Record>,
+) {
+    let zero = F::ZERO;
+    let one = F::ONE;
+    let offs = F::from(std::array::from_fn::<f64, LANES, _>(|l| l as f64));
+    let lane = offs + base as f64;
+    let tcur = F::from(std::array::from_fn::<f64, LANES, _>(|l| row[base + l]));
+    let live = lane.cmp_ge(F::splat(lo as f64))
+        & lane.cmp_le(F::splat(hi as f64))
+        & tcur.cmp_ge(F::splat(SATURATION));
+    let x = offs + xbase;
+    let mut e = [zero; 3];
+    let mut s = [zero; 3];
+    let mut d2_out = F::splat(f64::INFINITY);
+    for k in 0..3 {
+        e[k] = x * tri.n[k].x + rc.re[k];
+        s[k] = x * tri.sd[k].x + rc.rs[k];
+        let dx = x - tri.v[k].x;
+        let on_edge = e[k].cmp_le(zero) & s[k].cmp_ge(zero) & s[k].cmp_le(one);
+        let cand = on_edge.blend(e[k] * e[k], F::splat(f64::INFINITY));
+        d2_out = d2_out.fast_min(cand).fast_min(dx * dx + rc.dy2[k]);
+    }
+    let inside = e[0].cmp_gt(zero) & e[1].cmp_gt(zero) & e[2].cmp_gt(zero);
+    let emin = e[0].fast_min(e[1]).fast_min(e[2]);
+    let d2 = inside.blend(emin * emin, d2_out);
+    let keep = live & (inside | d2.cmp_lt(F::splat(m2)));
+    let mask = keep.move_mask();
+    if mask == 0 {
+        return;
+    }
+    let u = exp_neg_lanes(d2 * inv_sigma);
+    let inv = one / (one + u);
+    let uinv = u * inv;
+    // Inside: D = 1/(1 + u), 1 − D = u/(1 + u); outside the reverse.
+    let omd = inside.blend(uinv, inv);
+    let tnew = (tcur * keep.blend(omd, one)).to_array();
+    row[base..base + LANES].copy_from_slice(&tnew);
+    if !REC {
+        return;
+    }
+    let dval = inside.blend(inv, uinv).to_array();
+    let (e, s) = (e.map(|v| v.to_array()), s.map(|v| v.to_array()));
+    let ins = inside.move_mask();
+    for l in 0..LANES {
+        if mask & (1 << l) == 0 {
+            continue;
+        }
+        let xl = xbase + l as f64;
+        let is_in = ins & (1 << l) != 0;
+        // The closest boundary point: edge k at parameter s (a vertex is the start
+        // of its edge, s = 0), and p − q.
+        let (k, sk, diff) = if is_in {
+            let k = if e[0][l] <= e[1][l] && e[0][l] <= e[2][l] {
+                0
+            } else if e[1][l] <= e[2][l] {
+                1
+            } else {
+                2
+            };
+            (k, s[k][l].clamp(0.0, 1.0), tri.n[k] * e[k][l])
+        } else {
+            let mut best = (f64::INFINITY, 0, 0.0, DVec2::ZERO);
+            for k in 0..3 {
+                let (ek, sk) = (e[k][l], s[k][l]);
+                if ek <= 0.0 && (0.0..=1.0).contains(&sk) && ek * ek < best.0 {
+                    best = (ek * ek, k, sk, tri.n[k] * ek);
+                }
+                let dv = DVec2::new(xl, rc.y) - tri.v[k];
+                if dv.length_squared() < best.0 {
+                    best = (dv.length_squared(), k, 0.0, dv);
+                }
+            }
+            (best.1, best.2, best.3)
+        };
+        // ∂A/∂d² = δ·T·D/σ; ∂d²/∂a = −2(1 − s)(p − q), ∂d²/∂b = −2s(p − q).
+        let g = diff * (if is_in { -2.0 } else { 2.0 } * dval[l] * inv_sigma);
+        records.push(Record {
+            px: (li0 + base + l) as u32,
+            a: tri.idx[k],
+            b: tri.idx[(k + 1) % 3],
+            ga: g * (1.0 - sk),
+            gb: g * sk,
+        });
+    }
 }
 
 /// Runs the tile pass: writes every pixel's final transmittance into `trans`
@@ -265,87 +399,20 @@ pub(crate) fn run<const REC: bool>(
                     let Some((xa, xb)) = tri.span(yf, m, xl, xh) else {
                         continue;
                     };
-                    let r = [
-                        tri.n[0].y * yf + tri.c[0],
-                        tri.n[1].y * yf + tri.c[1],
-                        tri.n[2].y * yf + tri.c[2],
-                    ];
-                    let row = (y as usize - y0) * TILE;
-                    for x in xa..=xb {
-                        let li = row + (x as usize - x0);
-                        let tc = t[li];
-                        if tc < SATURATION {
-                            continue;
-                        }
-                        let xf = x as f64;
-                        let e = [tri.n[0].x * xf + r[0], tri.n[1].x * xf + r[1], tri.n[2].x * xf + r[2]];
-                        if e[0] > 0.0 && e[1] > 0.0 && e[2] > 0.0 {
-                            // Inside: the distance to the boundary is the smallest edge distance.
-                            let k = if e[0] <= e[1] && e[0] <= e[2] {
-                                0
-                            } else if e[1] <= e[2] {
-                                1
-                            } else {
-                                2
-                            };
-                            let d = e[k];
-                            let u = exp_neg(d * d * inv_sigma);
-                            let dval = 1.0 / (1.0 + u);
-                            t[li] = tc * (u * dval);
-                            if REC {
-                                let p = DVec2::new(xf, yf);
-                                let s = ((p - tri.v[k]).dot(tri.dir[k]) * tri.inv_len2[k]).clamp(0.0, 1.0);
-                                // p − q = d·n_k; ∂d²/∂a = −2(1 − s)(p − q), ∂d²/∂b = −2s(p − q).
-                                let g = tri.n[k] * (-2.0 * d * dval * inv_sigma);
-                                records.push(Record {
-                                    px: li as u32,
-                                    a: tri.idx[k],
-                                    b: tri.idx[(k + 1) % 3],
-                                    ga: g * (1.0 - s),
-                                    gb: g * s,
-                                });
-                            }
-                        } else {
-                            if e[0] <= -m || e[1] <= -m || e[2] <= -m {
-                                continue;
-                            }
-                            let p = DVec2::new(xf, yf);
-                            let mut best = f64::INFINITY;
-                            let mut bk = 0;
-                            let mut bs = 0.0;
-                            let mut bdiff = DVec2::ZERO;
-                            for k in 0..3 {
-                                if e[k] <= 0.0 {
-                                    let dv = p - tri.v[k];
-                                    let s = (dv.dot(tri.dir[k]) * tri.inv_len2[k]).clamp(0.0, 1.0);
-                                    let diff = dv - tri.dir[k] * s;
-                                    let d2 = diff.length_squared();
-                                    if d2 < best {
-                                        best = d2;
-                                        bk = k;
-                                        bs = s;
-                                        bdiff = diff;
-                                    }
-                                }
-                            }
-                            if best >= m2 {
-                                continue;
-                            }
-                            let u = exp_neg(best * inv_sigma);
-                            let omd = 1.0 / (1.0 + u);
-                            t[li] = tc * omd;
-                            if REC {
-                                // δ = −1: ∂A/∂d² = −T·D/σ with D = u/(1 + u).
-                                let g = bdiff * (2.0 * u * omd * inv_sigma);
-                                records.push(Record {
-                                    px: li as u32,
-                                    a: tri.idx[bk],
-                                    b: tri.idx[(bk + 1) % 3],
-                                    ga: g * (1.0 - bs),
-                                    gb: g * bs,
-                                });
-                            }
-                        }
+                    let rc = RowConsts {
+                        y: yf,
+                        re: std::array::from_fn(|k| tri.n[k].y * yf + tri.c[k]),
+                        rs: std::array::from_fn(|k| tri.sd[k].y * yf + tri.sc[k]),
+                        dy2: std::array::from_fn(|k| (yf - tri.v[k].y) * (yf - tri.v[k].y)),
+                    };
+                    let li0 = (y as usize - y0) * TILE;
+                    let row = &mut t[li0..li0 + TILE];
+                    let (lo, hi) = (xa as usize - x0, xb as usize - x0);
+                    let mut base = lo / LANES * LANES;
+                    while base <= hi {
+                        let xbase = (x0 + base) as f64;
+                        chunk::<REC>(tri, &rc, row, li0, xbase, lo, hi, base, inv_sigma, m2, records);
+                        base += LANES;
                     }
                 }
             }
@@ -372,14 +439,20 @@ mod tests {
     #[test]
     fn exp_neg_matches_std() {
         let mut worst = 0.0f64;
-        for i in 0..19000 {
-            let z = i as f64 * 0.037;
-            worst = worst.max((exp_neg(z) / (-z).exp() - 1.0).abs());
+        for i in 0..(76000 / LANES) {
+            let z: [f64; LANES] = std::array::from_fn(|o| (LANES * i + o) as f64 * 0.0093);
+            let got = exp_neg_lanes(F::from(z)).to_array();
+            for l in 0..LANES {
+                if z[l] <= 708.0 {
+                    worst = worst.max((got[l] / (-z[l]).exp() - 1.0).abs());
+                }
+            }
         }
         assert!(worst < 1e-14, "{worst}");
-        assert_eq!(exp_neg(0.0), 1.0);
-        assert_eq!(exp_neg(800.0), 0.0);
-        assert_eq!(exp_neg(f64::INFINITY), 0.0);
+        assert_eq!(exp_neg_lanes(F::ZERO).to_array(), [1.0; LANES]);
+        for z in [800.0, f64::INFINITY, 708.0, 1e300] {
+            assert!(exp_neg_lanes(F::splat(z)).to_array().iter().all(|&v| v < 1e-300));
+        }
     }
 
     #[test]

@@ -227,6 +227,25 @@ test('file input: per-view camera JSON, masks and images of the same names; Step
   await page.context().close();
 });
 
+test('drop: files dropped on the page, masks but no images, load with a notice', async () => {
+  const page = await openPage();
+  const files = folderFiles(join(root, 'www', 'example')).filter((f) => !f.rel.startsWith('images'));
+  const dt = await page.evaluateHandle((list) => {
+    const dt = new DataTransfer();
+    for (const f of list) dt.items.add(new File([Uint8Array.from(atob(f.b64), (c) => c.charCodeAt(0))], f.name));
+    return dt;
+  }, files.map((f) => ({ name: f.name, b64: f.buffer.toString('base64') })));
+  await page.dispatchEvent('#drop', 'drop', { dataTransfer: dt });
+  await waitLoaded(page);
+  assert.equal(await byId(page, 'view-iou').count(), 4);
+  const notice = page.locator('#notice');
+  assert.ok(await notice.isVisible());
+  assert.match(await notice.textContent(), /view 'view0': image 'images\/view0\.png' not given/);
+  assert.ok(await byId(page, 'error').isHidden());
+  assert.deepEqual(page.problems, []);
+  await page.context().close();
+});
+
 test('errors: a malformed .glb, alone or named by a scene, shows a specific error', async () => {
   const page = await openPage();
   const broken = { name: 'broken.glb', mimeType: 'model/gltf-binary', buffer: Buffer.from('glTF\x02\x00\x00\x00\x10\x00\x00\x00garbage!') };

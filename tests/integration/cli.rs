@@ -1,1 +1,195 @@
-//! (Being written.)
+//! The command line as a user runs it: real files in a temporary folder, exit
+//! statuses and one-line errors naming the file, the view and the problem.
+
+use crate::fixture;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_localisebot"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("the binary runs")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("localisebot-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+/// Fails with one line on stderr containing every `needle`.
+fn assert_error(o: &Output, needles: &[&str]) {
+    assert!(!o.status.success(), "expected failure, got success; stderr: {}", stderr(o));
+    let e = stderr(o);
+    assert_eq!(e.trim_end().lines().count(), 1, "one line expected: {e}");
+    for n in needles {
+        assert!(e.contains(n), "'{n}' not in: {e}");
+    }
+    assert!(!e.contains("panicked"), "{e}");
+}
+
+#[test]
+fn info_prints_the_duck_counts_and_bounds() {
+    let o = run(&["info", fixture("gltf/Duck/glTF-Binary/Duck.glb").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["triangles"], 4212);
+    assert_eq!(v["vertices"], 2399);
+    let min: Vec<f64> = serde_json::from_value(v["bounds"]["min"].clone()).unwrap();
+    let max: Vec<f64> = serde_json::from_value(v["bounds"]["max"].clone()).unwrap();
+    for (a, b) in min.iter().zip([-0.69298, 0.09929, -0.61328]) {
+        assert!((a - b).abs() < 1e-4, "{min:?}");
+    }
+    for (a, b) in max.iter().zip([0.9618, 1.6397, 0.53925]) {
+        assert!((a - b).abs() < 1e-4, "{max:?}");
+    }
+}
+
+fn synth(dir: &Path, mesh: &str, views: &str, extra: &[&str]) {
+    let mesh = fixture(mesh);
+    let mut args = vec!["synth", "--mesh", mesh.to_str().unwrap(), "--views", views, "--seed", "3"];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["--out", dir.to_str().unwrap()]);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn synth_render_fit_and_loss_work_together() {
+    let d = tmp("pipeline");
+    // A .gltf with an external .bin: the copy must bring the buffer along.
+    synth(&d, "gltf/Box/glTF/Box.gltf", "3", &["--width", "96", "--height", "80", "--images"]);
+    for f in ["scene.json", "Box.gltf", "Box0.bin", "masks/view0.png", "masks/view2.png", "images/view1.png"] {
+        assert!(d.join(f).is_file(), "{f} missing");
+    }
+    let scene: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("scene.json")).unwrap()).unwrap();
+    assert_eq!(scene["views"].as_array().unwrap().len(), 3);
+    assert_eq!(scene["views"][0]["camera"]["width"], 96);
+    let gt = scene["ground_truth_pose"].to_string();
+    std::fs::write(d.join("gt.json"), &gt).unwrap();
+
+    // Overlays at the true pose: IoU 1 in every view.
+    let o = run(&["render", d.join("scene.json").to_str().unwrap(), "--pose", d.join("gt.json").to_str().unwrap(), "--out", d.join("ov").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("view0: IoU 1.0000"), "{}", String::from_utf8_lossy(&o.stdout));
+    let png = image::open(d.join("ov/view2.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (96, 80));
+
+    // The loss is lower at the truth than off it.
+    let loss_at = |pose: &Path| -> serde_json::Value {
+        let o = run(&["loss", d.join("scene.json").to_str().unwrap(), "--pose", pose.to_str().unwrap(), "--sigma", "0.5"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let mut off: serde_json::Value = serde_json::from_str(&gt).unwrap();
+    off["translation"][0] = (off["translation"][0].as_f64().unwrap() + 0.1).into();
+    std::fs::write(d.join("off.json"), off.to_string()).unwrap();
+    let (at, away) = (loss_at(&d.join("gt.json")), loss_at(&d.join("off.json")));
+    assert!(at["loss"].as_f64().unwrap() < away["loss"].as_f64().unwrap());
+    assert_eq!(away["gradient"].as_array().unwrap().len(), 9);
+    assert_eq!(away["views"].as_array().unwrap().len(), 3);
+    // Moving back (−x) lowers the loss: the x-translation gradient is positive.
+    assert!(away["gradient"][3].as_f64().unwrap() > 0.0, "{}", away["gradient"]);
+
+    // Fit from nothing; the result file has the SPEC §3 fields.
+    let o = run(&["fit", d.join("scene.json").to_str().unwrap(), "--out", d.join("result.json").to_str().unwrap(), "--overlays", d.join("fit").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("result.json")).unwrap()).unwrap();
+    for k in ["pose", "matrix", "views", "loss_history", "seconds", "errors"] {
+        assert!(r.get(k).is_some(), "result lacks {k}");
+    }
+    for k in ["rotation", "quaternion", "translation", "scale"] {
+        assert!(r["pose"].get(k).is_some(), "pose lacks {k}");
+    }
+    assert!(r["views"][0]["iou"].as_f64().unwrap() > 0.9 && r["views"][0]["hausdorff_px"].is_number());
+    // The box is symmetric: ADD-S is what measures it.
+    assert!(r["errors"]["add_s_rel"].as_f64().unwrap() < 0.05, "{}", r["errors"]);
+    assert!(d.join("fit/view0.png").is_file());
+    // A result file serves as a pose file.
+    let o = run(&["render", d.join("scene.json").to_str().unwrap(), "--pose", d.join("result.json").to_str().unwrap(), "--out", d.join("ov2").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn one_view_fits_with_a_warning() {
+    let d = tmp("oneview");
+    synth(&d, "gltf/Box/glTF-Binary/Box.glb", "1", &["--width", "64", "--height", "64"]);
+    let o = run(&["fit", d.join("scene.json").to_str().unwrap(), "--out", d.join("r.json").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning: ") && stderr(&o).contains("one view"), "{}", stderr(&o));
+}
+
+#[test]
+fn bad_inputs_give_one_clear_line() {
+    let d = tmp("bad");
+    // Missing file.
+    assert_error(&run(&["info", d.join("nope.glb").to_str().unwrap()]), &["nope.glb", "cannot read"]);
+    // Truncated GLB.
+    let duck = std::fs::read(fixture("gltf/Duck/glTF-Binary/Duck.glb")).unwrap();
+    std::fs::write(d.join("cut.glb"), &duck[..5000]).unwrap();
+    assert_error(&run(&["info", d.join("cut.glb").to_str().unwrap()]), &["cut.glb"]);
+    // Draco.
+    let draco = fixture("gltf/2CylinderEngine/glTF-Draco-assimp/2CylinderEngine.gltf");
+    assert_error(&run(&["info", draco.to_str().unwrap()]), &["Draco"]);
+
+    synth(&d, "gltf/Box/glTF-Binary/Box.glb", "2", &["--width", "64", "--height", "48"]);
+    let scene_path = d.join("scene.json");
+    let text = std::fs::read_to_string(&scene_path).unwrap();
+    let fit = |name: &str, scene: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, scene).unwrap();
+        run(&["fit", p.to_str().unwrap(), "--out", d.join("r.json").to_str().unwrap()])
+    };
+    // NaN in the JSON.
+    assert_error(&fit("nan.json", &text.replacen("\"fx\": ", "\"fx\": NaN, \"x\": ", 1)), &["nan.json"]);
+    // A non-finite focal length reaches the camera check.
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["views"][1]["camera"]["fx"] = (-5.0).into();
+    assert_error(&fit("fx.json", &v.to_string()), &["view1", "focal"]);
+    // A singular rotation.
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["views"][0]["camera"]["world_to_camera"][0] = serde_json::json!([0.0, 0.0, 0.0, 0.0]);
+    assert_error(&fit("singular.json", &v.to_string()), &["view0", "singular"]);
+    // A mask of the wrong size.
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["views"][0]["camera"]["width"] = 65.into();
+    assert_error(&fit("size.json", &v.to_string()), &["view0", "masks/view0.png", "64×48", "65×48"]);
+    // An empty mask.
+    let black = localisebot::io::png::encode_gray(64, 48, &vec![0u8; 64 * 48]);
+    std::fs::write(d.join("masks/empty.png"), black).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["views"][1]["mask"] = "masks/empty.png".into();
+    assert_error(&fit("empty.json", &v.to_string()), &["view1", "empty"]);
+    // A missing mask file.
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["views"][1]["mask"] = "masks/gone.png".into();
+    assert_error(&fit("gone.json", &v.to_string()), &["masks/gone.png", "not found"]);
+    // A pose behind the camera.
+    let mut gt = v["ground_truth_pose"].clone();
+    let cam = &v["views"][0]["camera"]["world_to_camera"];
+    // Put the object 1 unit behind view0's camera centre.
+    let r: Vec<Vec<f64>> = serde_json::from_value(cam.clone()).unwrap();
+    let rot = glam::DMat3::from_cols_array_2d(&[
+        [r[0][0], r[1][0], r[2][0]],
+        [r[0][1], r[1][1], r[2][1]],
+        [r[0][2], r[1][2], r[2][2]],
+    ]);
+    let t = glam::DVec3::new(r[0][3], r[1][3], r[2][3]);
+    let behind = rot.transpose() * (glam::DVec3::new(0.0, 0.0, -1.0) - t);
+    gt["translation"] = serde_json::json!(behind.to_array());
+    gt["scale"] = serde_json::json!([0.1, 0.1, 0.1]);
+    std::fs::write(d.join("behind.json"), gt.to_string()).unwrap();
+    assert_error(
+        &run(&["render", scene_path.to_str().unwrap(), "--pose", d.join("behind.json").to_str().unwrap(), "--out", d.join("o").to_str().unwrap()]),
+        &["view0", "behind the camera"],
+    );
+    // Bad search settings.
+    assert_error(&run(&["fit", scene_path.to_str().unwrap(), "--out", "x.json", "--search", "grid:3"]), &["--search"]);
+}

@@ -3,6 +3,7 @@
 
 mod cli;
 mod estimator;
+mod grasps;
 mod hard_raster;
 mod importers;
 mod mesh_loading;
