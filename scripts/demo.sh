@@ -1,9 +1,19 @@
 #!/usr/bin/env bash
 # The README's first command: builds the wasm package into www/pkg/ and serves www/
-# on http://127.0.0.1:8080/ (the example is one click away: "Load example").
-# Ctrl-C stops the server.
+# on http://127.0.0.1:8080/ (PORT=... to change), where "Load example" is one click
+# away. Installs the wasm target and the matching wasm-bindgen CLI first if missing
+# (a few minutes, once). Ctrl-C stops the server.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export PATH="$HOME/.cargo/bin:$PATH"
+WB=$(grep -A1 '^name = "wasm-bindgen"$' Cargo.lock | sed -n 's/^version = "\(.*\)"/\1/p' | head -n1)
+if ! rustup target list --installed | grep -qx wasm32-unknown-unknown; then
+  rustup target add wasm32-unknown-unknown
+fi
+if ! wasm-bindgen --version 2>/dev/null | grep -qx "wasm-bindgen ${WB:-0.2.130}"; then
+  cargo install wasm-bindgen-cli --version "${WB:-0.2.130}"
+fi
 bash scripts/build-wasm.sh
-echo "open http://127.0.0.1:8080/ and click 'Load example' (Ctrl-C stops the server)"
-exec node scripts/serve.mjs --root www --host 127.0.0.1 --port "${PORT:-8080}"
+PORT=${PORT:-8080}
+echo "LocaliseBot: open http://127.0.0.1:$PORT/ and click 'Load example' (Ctrl-C stops the server)"
+exec node scripts/serve.mjs --root www --host 127.0.0.1 --port "$PORT"

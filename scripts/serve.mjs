@@ -61,6 +61,10 @@ const server = createServer(async (req, res) => {
   }
 });
 
+server.on('error', (e) => {
+  console.error(`cannot serve on ${args.host}:${args.port}: ${e.code === 'EADDRINUSE' ? 'the port is in use (try --port)' : e.message}`);
+  process.exit(1);
+});
 server.listen(Number(args.port), args.host, () => {
   const { address, port } = server.address();
   console.log(`serving ${root} at http://${address}:${port}/`);

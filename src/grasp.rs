@@ -398,6 +398,19 @@ pub fn draw_grasp(img: &mut Rgba, rect: &[DVec2; 4], colour: [u8; 4]) {
     }
 }
 
+/// The 2-D rectangles of `grasps` transferred with `pose` into `camera` (grasps
+/// behind the camera left out).
+pub fn rectangles(grasps: &[Grasp], pose: &Pose, camera: &Camera) -> Vec<[DVec2; 4]> {
+    grasps.iter().filter_map(|g| grasp_rectangle(&g.to_world(pose), camera)).collect()
+}
+
+/// Draws `grasps`, transferred with `pose` into `camera`, over an overlay (cyan).
+pub fn draw_grasps(img: &mut Rgba, grasps: &[Grasp], pose: &Pose, camera: &Camera) {
+    for r in rectangles(grasps, pose, camera) {
+        draw_grasp(img, &r, [0, 220, 255, 255]);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

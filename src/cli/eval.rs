@@ -130,7 +130,7 @@ fn evaluate_scene(path: &Path, settings: &FitSettings, curve: bool) -> CliResult
     let (est, secs) = fit(&scene, n, settings).map_err(|e| format!("{}: {e}", path.display()))?;
     let result = est.result(secs, Some(&gt));
     let predicted_area = est.view_figures(&est.pose()).iter().map(|f| f.2.area()).collect();
-    let (grasps_correct, grasps_total) = grasp_accuracy(&scene, &est.pose(), &gt, path)?;
+    let (grasps_correct, grasps_total) = grasp_accuracy(&scene, &est.pose(), &gt);
     let mut loss_by_views = Vec::new();
     let mut add_rel_by_views = Vec::new();
     if curve {
@@ -169,23 +169,20 @@ fn evaluate_scene(path: &Path, settings: &FitSettings, curve: bool) -> CliResult
     }))
 }
 
-/// Grasps transferred with the estimated pose vs the true pose, checked in every view.
-fn grasp_accuracy(scene: &Scene, est: &Pose, gt: &Pose, path: &Path) -> CliResult<(usize, usize)> {
+/// Grasps transferred with the estimated pose vs the true pose, checked in every view
+/// where the true grasp's rectangle is in front of the camera: (correct, checked).
+fn grasp_accuracy(scene: &Scene, est: &Pose, gt: &Pose) -> (usize, usize) {
     let mut correct = 0;
     let mut total = 0;
-    for (i, g) in scene.json.grasps.iter().enumerate() {
-        let g = grasp::Grasp::from_json(g).map_err(|e| format!("{}: grasps[{i}]: {e}", path.display()))?;
-        let (we, wg) = (g.to_world(est), g.to_world(gt));
+    for g in &scene.grasps {
         for v in &scene.views {
-            if let (Some(re), Some(rg)) = (grasp::grasp_rectangle(&we, &v.camera), grasp::grasp_rectangle(&wg, &v.camera)) {
+            if let Some(ok) = grasp::grasp_transfer_correct(g, est, gt, &v.camera) {
                 total += 1;
-                if grasp::grasp_correct(&re, &rg) {
-                    correct += 1;
-                }
+                correct += ok as usize;
             }
         }
     }
-    Ok((correct, total))
+    (correct, total)
 }
 
 fn print_table(s: &Summary) {

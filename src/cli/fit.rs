@@ -146,7 +146,9 @@ pub fn run(a: &FitArgs) -> CliResult {
     if let Some(dir) = &a.overlays {
         let pose = est.pose();
         for (v, (_, _, m)) in scene.views.iter().zip(est.view_figures(&pose)) {
-            write(&dir.join(format!("{}.png", v.name)), &encode_rgba(&overlay::overlay(v, Some(&m))))?;
+            let mut img = overlay::overlay(v, Some(&m));
+            localisebot::grasp::draw_grasps(&mut img, &scene.grasps, &pose, &v.camera);
+            write(&dir.join(format!("{}.png", v.name)), &encode_rgba(&img))?;
         }
     }
     let mut line = format!(

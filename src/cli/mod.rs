@@ -2,6 +2,7 @@
 //! every error reaches the user as one line on stderr and a non-zero exit status.
 
 mod bench;
+mod eval;
 mod files;
 mod fit;
 mod import;
@@ -36,6 +37,8 @@ enum Command {
     Loss(loss::LossArgs),
     /// Time the forward + backward pass and full fits (see BENCHMARKS.md).
     Bench(bench::BenchArgs),
+    /// Fit every scene of some folders and write the paper's tables and plots.
+    Eval(eval::EvalArgs),
     /// Import a dataset folder (NeRF, BOP) as a scene folder.
     #[command(subcommand)]
     Import(import::ImportCommand),
@@ -61,6 +64,7 @@ pub fn main() -> i32 {
         Command::Fit(args) => fit::run(&args),
         Command::Loss(args) => loss::run(&args),
         Command::Import(cmd) => import::run(&cmd),
+        Command::Eval(args) => eval::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Render { scene, pose, out } => render::run(&scene, &pose, &out),
     };

@@ -1,9 +1,10 @@
 //! `localisebot render SCENE --pose POSE --out DIR`: one overlay PNG per view (the
-//! image or mask, the mask outline and the contour rendered at the pose).
+//! image or mask, the mask outline, the contour rendered at the pose and the scene's
+//! grasp rectangles), and each view's grasp rectangles as an OCID/Cornell `.txt`.
 
 use super::files::{load_pose, load_scene_file, write, CliResult};
 use localisebot::io::png::encode_rgba;
-use localisebot::{metrics, overlay, raster::hard};
+use localisebot::{grasp, metrics, overlay, raster::hard};
 use std::path::Path;
 
 /// Runs `render`.
@@ -12,9 +13,14 @@ pub fn run(scene: &Path, pose: &Path, out: &Path) -> CliResult {
     let pose = load_pose(pose)?;
     for v in &scene.views {
         let rendered = hard::render_checked(&v.name, &scene.mesh, &pose, &v.camera).map_err(|e| e.to_string())?;
-        let img = overlay::overlay(v, Some(&rendered));
+        let mut img = overlay::overlay(v, Some(&rendered));
+        grasp::draw_grasps(&mut img, &scene.grasps, &pose, &v.camera);
         let path = out.join(format!("{}.png", v.name));
         write(&path, &encode_rgba(&img))?;
+        if !scene.grasps.is_empty() {
+            let rects = grasp::rectangles(&scene.grasps, &pose, &v.camera);
+            write(&out.join(format!("{}.grasps.txt", v.name)), grasp::rectangles_to_txt(&rects).as_bytes())?;
+        }
         println!("{}: IoU {:.4} -> {}", v.name, metrics::hard_iou(&rendered, &v.mask), path.display());
     }
     Ok(())

@@ -4,6 +4,7 @@
 use super::files::{load_mesh, load_pose, read, write, CliResult};
 use clap::Args;
 use localisebot::io::png::{encode_gray, encode_rgba};
+use localisebot::grasp::antipodal_grasps;
 use localisebot::synth::{synthesize, SynthSettings};
 use localisebot::{CameraJson, PoseJson, SceneJson, ViewJson};
 use std::path::{Path, PathBuf};
@@ -29,6 +30,10 @@ pub struct SynthArgs {
     /// Pose file to render at, instead of a random pose.
     #[arg(long)]
     pose: Option<PathBuf>,
+    /// Add this many antipodal grasp candidates (pairs of opposed surface points
+    /// within a gripper opening of half the object's diameter) to the scene.
+    #[arg(long, default_value_t = 0)]
+    grasps: usize,
     /// Also write shaded renders as the views' images.
     #[arg(long)]
     images: bool,
@@ -66,7 +71,7 @@ pub fn run(a: &SynthArgs) -> CliResult {
         views,
         initial_pose: None,
         ground_truth_pose: Some(PoseJson::from_pose(&scene.pose)),
-        grasps: vec![],
+        grasps: antipodal_grasps(&mesh, 0.5 * mesh.diameter(), a.grasps, a.seed).iter().map(|g| g.to_json()).collect(),
     };
     write(&a.out.join("scene.json"), json.to_json_string().as_bytes())?;
     eprintln!("wrote {} ({} views)", a.out.join("scene.json").display(), scene.cameras.len());

@@ -60,6 +60,8 @@ pub struct Scene {
     pub initial_pose: Option<Pose>,
     /// A given true pose.
     pub ground_truth_pose: Option<Pose>,
+    /// Grasps in the object frame, validated.
+    pub grasps: Vec<crate::grasp::Grasp>,
     /// The file as read.
     pub json: SceneJson,
 }
@@ -166,6 +168,7 @@ pub fn scene_from_parts(
     Ok(Scene {
         initial_pose: pose(&json.initial_pose, "initial_pose")?,
         ground_truth_pose: pose(&json.ground_truth_pose, "ground_truth_pose")?,
+        grasps: crate::grasp::grasps_from_json(&json.grasps, scene_file)?,
         mesh,
         views,
         json,

@@ -28,7 +28,6 @@ pub(crate) const TILE: usize = 16;
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct TriSetup {
     pub idx: [u32; 3],
-    pub v: [DVec2; 3],
     /// Unit inward edge normals and offsets: `e_k(p) = n_k·p + c_k`.
     pub n: [DVec2; 3],
     pub c: [f64; 3],
@@ -36,6 +35,9 @@ pub(crate) struct TriSetup {
     /// |v_{k+1} − v_k|² = sd_k·p + sc_k` (0 at v_k, 1 at v_{k+1}).
     pub sd: [DVec2; 3],
     pub sc: [f64; 3],
+    /// Edge vectors `v_{k+1} − v_k` and their lengths.
+    pub dir: [DVec2; 3],
+    pub len: [f64; 3],
     /// 1 / n_k.x (0 for a horizontal edge).
     pub inv_nx: [f64; 3],
     pub x0: i32,
@@ -71,11 +73,12 @@ impl TriSetup {
         let s = cr.signum();
         let mut t = TriSetup {
             idx,
-            v,
             n: [DVec2::ZERO; 3],
             c: [0.0; 3],
             sd: [DVec2::ZERO; 3],
             sc: [0.0; 3],
+            dir: [DVec2::ZERO; 3],
+            len: [0.0; 3],
             inv_nx: [0.0; 3],
             x0,
             x1,
@@ -88,6 +91,8 @@ impl TriSetup {
             let l2 = d.length_squared();
             t.sd[k] = d / l2;
             t.sc[k] = -a.dot(d) / l2;
+            t.dir[k] = d;
+            t.len[k] = l2.sqrt();
             // cross(d, p − a) = d.x (p.y − a.y) − d.y (p.x − a.x), scaled to unit length.
             let nk = DVec2::new(-d.y, d.x) * (s / l2.sqrt());
             t.n[k] = nk;
@@ -249,25 +254,34 @@ fn exp_neg_lanes(z: F) -> F {
     p * bytemuck::cast::<U, F>(scale)
 }
 
-/// Per-row constants of one triangle.
+/// Per-row constants of one triangle: at pixel x of the row,
+/// `e_k = n_k.x·x + re_k` and `s_k = sd_k.x·x + rs_k`.
 struct RowConsts {
     y: f64,
-    /// `e_k = n_k.x·x + re_k`.
     re: [f64; 3],
-    /// `s_k = sd_k.x·x + rs_k`.
     rs: [f64; 3],
-    /// `(y − v_k.y)²`.
-    dy2: [f64; 3],
+}
+
+/// Per-triangle lane constants: `n_k.x·l` and `sd_k.x·l` for lane l.
+struct LaneConsts {
+    ne: [F; 3],
+    ns: [F; 3],
 }
 
 /// One chunk of `LANES` pixels of a tile row: multiplies the row's transmittance
 /// `row[base..base + LANES]` by `1 − D` for the lanes with `lo ≤ base + l ≤ hi`
 /// (pixel x = `xbase + l`) and, with `REC`, pushes their records.
+///
+/// The squared distance to the boundary is the smallest squared distance to the
+/// three edge segments, `e_k² + (|v_{k+1} − v_k|·excess_k)²` with
+/// `excess_k = max(−s_k, s_k − 1, 0)` — for inside and outside pixels alike (inside,
+/// the closest edge's foot lies on the segment, so this is `min_k e_k²`).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn chunk<const REC: bool>(
     tri: &TriSetup,
     rc: &RowConsts,
+    lc: &LaneConsts,
     row: &mut [f64],
     li0: usize,
     xbase: f64,
@@ -280,27 +294,24 @@ fn chunk<const REC: bool>(
 ) {
     let zero = F::ZERO;
     let one = F::ONE;
-    let offs = F::from(std::array::from_fn::<f64, LANES, _>(|l| l as f64));
-    let lane = offs + base as f64;
+    let lane = F::from(std::array::from_fn::<f64, LANES, _>(|l| (base + l) as f64));
     let tcur = F::from(std::array::from_fn::<f64, LANES, _>(|l| row[base + l]));
-    let live = lane.cmp_ge(F::splat(lo as f64))
-        & lane.cmp_le(F::splat(hi as f64))
-        & tcur.cmp_ge(F::splat(SATURATION));
-    let x = offs + xbase;
-    let mut e = [zero; 3];
-    let mut s = [zero; 3];
-    let mut d2_out = F::splat(f64::INFINITY);
+    let live = lane.cmp_ge(F::splat(lo as f64)) & lane.cmp_le(F::splat(hi as f64)) & tcur.cmp_ge(F::splat(SATURATION));
+    let mut d2 = F::splat(f64::INFINITY);
+    let mut emin = d2;
+    let mut best_k = zero;
     for k in 0..3 {
-        e[k] = x * tri.n[k].x + rc.re[k];
-        s[k] = x * tri.sd[k].x + rc.rs[k];
-        let dx = x - tri.v[k].x;
-        let on_edge = e[k].cmp_le(zero) & s[k].cmp_ge(zero) & s[k].cmp_le(one);
-        let cand = on_edge.blend(e[k] * e[k], F::splat(f64::INFINITY));
-        d2_out = d2_out.fast_min(cand).fast_min(dx * dx + rc.dy2[k]);
+        let e = lc.ne[k] + (tri.n[k].x * xbase + rc.re[k]);
+        let s = lc.ns[k] + (tri.sd[k].x * xbase + rc.rs[k]);
+        let excess = (zero - s).fast_max(s - one).fast_max(zero) * tri.len[k];
+        let sd = e * e + excess * excess;
+        if REC {
+            best_k = sd.cmp_lt(d2).blend(F::splat(k as f64), best_k);
+        }
+        d2 = d2.fast_min(sd);
+        emin = emin.fast_min(e);
     }
-    let inside = e[0].cmp_gt(zero) & e[1].cmp_gt(zero) & e[2].cmp_gt(zero);
-    let emin = e[0].fast_min(e[1]).fast_min(e[2]);
-    let d2 = inside.blend(emin * emin, d2_out);
+    let inside = emin.cmp_gt(zero);
     let keep = live & (inside | d2.cmp_lt(F::splat(m2)));
     let mask = keep.move_mask();
     if mask == 0 {
@@ -310,54 +321,34 @@ fn chunk<const REC: bool>(
     let inv = one / (one + u);
     let uinv = u * inv;
     // Inside: D = 1/(1 + u), 1 − D = u/(1 + u); outside the reverse.
-    let omd = inside.blend(uinv, inv);
-    let tnew = (tcur * keep.blend(omd, one)).to_array();
+    let tnew = (tcur * keep.blend(inside.blend(uinv, inv), one)).to_array();
     row[base..base + LANES].copy_from_slice(&tnew);
     if !REC {
         return;
     }
-    let dval = inside.blend(inv, uinv).to_array();
-    let (e, s) = (e.map(|v| v.to_array()), s.map(|v| v.to_array()));
-    let ins = inside.move_mask();
+    // ∂A/∂d² = δ·T·D/σ, and ∂d²/∂a = −2(1 − s)(p − q), ∂d²/∂b = −2s(p − q): the
+    // record keeps c = −2δ·D/σ, to be multiplied by T once it is final.
+    let coef = inside
+        .blend(inv * (-2.0 * inv_sigma), uinv * (2.0 * inv_sigma))
+        .to_array();
+    let best_k = best_k.to_array();
     for l in 0..LANES {
         if mask & (1 << l) == 0 {
             continue;
         }
-        let xl = xbase + l as f64;
-        let is_in = ins & (1 << l) != 0;
-        // The closest boundary point: edge k at parameter s (a vertex is the start
-        // of its edge, s = 0), and p − q.
-        let (k, sk, diff) = if is_in {
-            let k = if e[0][l] <= e[1][l] && e[0][l] <= e[2][l] {
-                0
-            } else if e[1][l] <= e[2][l] {
-                1
-            } else {
-                2
-            };
-            (k, s[k][l].clamp(0.0, 1.0), tri.n[k] * e[k][l])
-        } else {
-            let mut best = (f64::INFINITY, 0, 0.0, DVec2::ZERO);
-            for k in 0..3 {
-                let (ek, sk) = (e[k][l], s[k][l]);
-                if ek <= 0.0 && (0.0..=1.0).contains(&sk) && ek * ek < best.0 {
-                    best = (ek * ek, k, sk, tri.n[k] * ek);
-                }
-                let dv = DVec2::new(xl, rc.y) - tri.v[k];
-                if dv.length_squared() < best.0 {
-                    best = (dv.length_squared(), k, 0.0, dv);
-                }
-            }
-            (best.1, best.2, best.3)
-        };
-        // ∂A/∂d² = δ·T·D/σ; ∂d²/∂a = −2(1 − s)(p − q), ∂d²/∂b = −2s(p − q).
-        let g = diff * (if is_in { -2.0 } else { 2.0 } * dval[l] * inv_sigma);
+        let k = best_k[l] as usize;
+        let p = DVec2::new(xbase + l as f64, rc.y);
+        let e = tri.n[k].dot(p) + tri.c[k];
+        let s = tri.sd[k].dot(p) + tri.sc[k];
+        let sc = s.clamp(0.0, 1.0);
+        // p − q with q = v_k + sc·dir_k, from p − v_k = s·dir_k + e·n_k.
+        let g = (tri.dir[k] * (s - sc) + tri.n[k] * e) * coef[l];
         records.push(Record {
             px: (li0 + base + l) as u32,
             a: tri.idx[k],
             b: tri.idx[(k + 1) % 3],
-            ga: g * (1.0 - sk),
-            gb: g * sk,
+            ga: g * (1.0 - sc),
+            gb: g * sc,
         });
     }
 }
@@ -377,6 +368,7 @@ pub(crate) fn run<const REC: bool>(
     let bins = pass.bins;
     trans.fill(1.0);
     let mut t = [1.0f64; TILE * TILE];
+    let offs = F::from(std::array::from_fn::<f64, LANES, _>(|l| l as f64));
     for ty in 0..bins.tiles_y {
         for tx in 0..bins.tiles_x {
             let ti = ty * bins.tiles_x + tx;
@@ -392,6 +384,10 @@ pub(crate) fn run<const REC: bool>(
             records.clear();
             for &k in list {
                 let tri = &pass.tris[k as usize];
+                let lc = LaneConsts {
+                    ne: std::array::from_fn(|k| offs * tri.n[k].x),
+                    ns: std::array::from_fn(|k| offs * tri.sd[k].x),
+                };
                 let xl = tri.x0.max(x0 as i32);
                 let xh = tri.x1.min(tx1);
                 for y in tri.y0.max(y0 as i32)..=tri.y1.min(ty1) {
@@ -403,7 +399,6 @@ pub(crate) fn run<const REC: bool>(
                         y: yf,
                         re: std::array::from_fn(|k| tri.n[k].y * yf + tri.c[k]),
                         rs: std::array::from_fn(|k| tri.sd[k].y * yf + tri.sc[k]),
-                        dy2: std::array::from_fn(|k| (yf - tri.v[k].y) * (yf - tri.v[k].y)),
                     };
                     let li0 = (y as usize - y0) * TILE;
                     let row = &mut t[li0..li0 + TILE];
@@ -411,7 +406,7 @@ pub(crate) fn run<const REC: bool>(
                     let mut base = lo / LANES * LANES;
                     while base <= hi {
                         let xbase = (x0 + base) as f64;
-                        chunk::<REC>(tri, &rc, row, li0, xbase, lo, hi, base, inv_sigma, m2, records);
+                        chunk::<REC>(tri, &rc, &lc, row, li0, xbase, lo, hi, base, inv_sigma, m2, records);
                         base += LANES;
                     }
                 }
@@ -467,9 +462,9 @@ mod tests {
         .collect();
         let mut b = Bins::default();
         b.build(&tris, 21, 19);
-        assert_eq!((b.tiles_x, b.tiles_y), (3, 3));
-        // Triangle 0 spans x 0..=20 (clipped), y 0..=18: all 9 tiles; triangle 1: tile 0.
-        assert_eq!(b.items.len(), 10);
+        assert_eq!((b.tiles_x, b.tiles_y), (21usize.div_ceil(TILE), 19usize.div_ceil(TILE)));
+        // Triangle 0 spans x 0..=20 (clipped), y 0..=18: every tile; triangle 1: tile 0.
+        assert_eq!(b.items.len(), b.tiles_x * b.tiles_y + 1);
         assert_eq!(&b.items[b.start[0] as usize..b.start[1] as usize], &[0, 1]);
     }
 }

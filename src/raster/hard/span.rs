@@ -89,7 +89,7 @@ pub fn triangle_spans(mut v: [[i64; 2]; 3], width: u32, height: u32, span: &mut 
             let (mut lo, mut hi) = (i64::MAX, -1);
             let mut e = w;
             for k in 0..=last {
-                if (e[0] | e[1]) >= 0 {
+                if (e[0] | e[1] | e[2]) >= 0 {
                     lo = lo.min(k);
                     hi = k;
                 }
