@@ -9,8 +9,8 @@ use crate::mask::Mask;
 use crate::mesh::Mesh;
 use crate::metrics;
 use crate::optim::adam::{Adam, AdamSettings};
-use crate::optim::search::{self, Candidate, LowResView, SearchSettings};
 use crate::optim::lm::{self, Free, Lm};
+use crate::optim::search::{self, Candidate, LowResView, SearchSettings};
 use crate::optim::{init, params};
 use crate::pose::Pose;
 use crate::raster::hard;
@@ -219,7 +219,10 @@ impl Estimator {
         for v in &views {
             crate::io::scene::check_mask(&v.name, "mask", &v.mask, v.camera.width, v.camera.height)?;
         }
-        let b = mesh.bounds().ok_or_else(|| Error::Mesh { file: "mesh".into(), problem: "has no vertices".into() })?;
+        let b = mesh.bounds().ok_or_else(|| Error::Mesh {
+            file: "mesh".into(),
+            problem: "has no vertices".into(),
+        })?;
         let centre = b.centre();
         let radius = (b.size().length() * 0.5).max(1e-12);
         let mut est = Estimator {
@@ -292,7 +295,11 @@ impl Estimator {
             _ => init::scale_from_areas(&self.views, x, mean_area),
         };
         let scale = DVec3::splat(s);
-        let pose = Pose { rotation: DMat3::IDENTITY, translation: x - scale * self.centre, scale };
+        let pose = Pose {
+            rotation: DMat3::IDENTITY,
+            translation: x - scale * self.centre,
+            scale,
+        };
         self.check_in_front(&pose)?;
         Ok(pose)
     }
@@ -354,9 +361,18 @@ impl Estimator {
             let r = self.rotations[i];
             let s = self.start.scale;
             let c = self.start.apply(self.centre);
-            let pose = Pose { rotation: r, translation: c - r * (s * self.centre), scale: s };
-            let cand =
-                search::score_candidate(&self.search_mesh, &self.low, pose, self.centre, self.settings.search.refit_rounds);
+            let pose = Pose {
+                rotation: r,
+                translation: c - r * (s * self.centre),
+                scale: s,
+            };
+            let cand = search::score_candidate(
+                &self.search_mesh,
+                &self.low,
+                pose,
+                self.centre,
+                self.settings.search.refit_rounds,
+            );
             self.scored.push(cand);
         }
         self.next_rotation = end;
@@ -376,7 +392,10 @@ impl Estimator {
     fn refine_step(&mut self) {
         let stage = self.settings.stages[self.stage].clone();
         let last_stage = self.stage + 1 == self.settings.stages.len();
-        let target = self.target.as_mut().expect("a refinement target exists in the refine phase");
+        let target = self
+            .target
+            .as_mut()
+            .expect("a refinement target exists in the refine phase");
         let t = &mut self.tracks[self.current];
         let length = self.radius * t.pose.scale.max_element();
         let loss = match stage.optimiser {
@@ -416,7 +435,11 @@ impl Estimator {
         // last 5 iterations (any stage; in the last one it ends the fit).
         let n = t.history.len();
         if self.iter_in_stage >= 6 && n > 5 {
-            let old = t.history[..n - 5].iter().rev().take(self.iter_in_stage - 5).fold(f64::INFINITY, |a, &b| a.min(b));
+            let old = t.history[..n - 5]
+                .iter()
+                .rev()
+                .take(self.iter_in_stage - 5)
+                .fold(f64::INFINITY, |a, &b| a.min(b));
             if old.is_finite() && old - t.best_loss <= self.settings.tolerance * old.abs().max(1e-12) {
                 t.converged = last_stage;
                 t.done_in_stage = true;
@@ -479,7 +502,11 @@ impl Estimator {
     /// The pose the fit currently holds (the best so far once done).
     pub fn pose(&self) -> Pose {
         match self.phase {
-            Phase::Search => self.scored.iter().max_by(|a, b| a.score.total_cmp(&b.score)).map_or(self.start, |c| c.pose),
+            Phase::Search => self
+                .scored
+                .iter()
+                .max_by(|a, b| a.score.total_cmp(&b.score))
+                .map_or(self.start, |c| c.pose),
             Phase::Refine => self.tracks[self.current].pose,
             Phase::Done => self.tracks[0].best_pose,
         }
@@ -489,10 +516,14 @@ impl Estimator {
     pub fn progress(&self) -> Progress {
         let pose = self.pose();
         let view_iou = match (&self.phase, &self.target) {
-            (Phase::Search, _) | (_, None) => self.low.iter().map(|v| {
-                let proj = crate::raster::project::project_mesh(&self.search_mesh, &pose, &v.camera);
-                hard::render_bits(&proj, &self.search_mesh.triangles, &v.camera).iou(&v.bits)
-            }).collect(),
+            (Phase::Search, _) | (_, None) => self
+                .low
+                .iter()
+                .map(|v| {
+                    let proj = crate::raster::project::project_mesh(&self.search_mesh, &pose, &v.camera);
+                    hard::render_bits(&proj, &self.search_mesh.triangles, &v.camera).iou(&v.bits)
+                })
+                .collect(),
             (_, Some(t)) => t.hard_ious(&self.mesh, &pose),
         };
         Progress {
@@ -512,7 +543,10 @@ impl Estimator {
     /// The loss history of the winning candidate (all stages), once done; of the
     /// current candidate before.
     pub fn loss_history(&self) -> Vec<f64> {
-        self.tracks.get(self.current).map(|t| t.history.clone()).unwrap_or_default()
+        self.tracks
+            .get(self.current)
+            .map(|t| t.history.clone())
+            .unwrap_or_default()
     }
 
     /// Per-view figures at full resolution for a pose: (hard IoU, Hausdorff px, rendered mask).

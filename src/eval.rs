@@ -87,7 +87,10 @@ pub struct Summary {
 
 /// The accuracy measure of a scene: ADD-S for symmetric objects, ADD otherwise.
 pub fn accuracy_measure(o: &SceneOutcome) -> f64 {
-    o.result.errors.as_ref().map_or(f64::INFINITY, |e| if o.symmetric { e.add_s_rel } else { e.add_rel })
+    o.result
+        .errors
+        .as_ref()
+        .map_or(f64::INFINITY, |e| if o.symmetric { e.add_s_rel } else { e.add_rel })
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -120,16 +123,36 @@ pub fn prf(outcomes: &[SceneOutcome], threshold: f64) -> PrfRow {
     let ratio = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f64 / b as f64 };
     let (p, r) = (ratio(tp, pred), ratio(tp, gt));
     let f1 = if p + r > 0.0 { 2.0 * p * r / (p + r) } else { 0.0 };
-    PrfRow { threshold, tp, predictions: pred, ground_truths: gt, precision: p, recall: r, f1 }
+    PrfRow {
+        threshold,
+        tp,
+        predictions: pred,
+        ground_truths: gt,
+        precision: p,
+        recall: r,
+        f1,
+    }
 }
 
 fn by_views(outcomes: &[SceneOutcome], get: impl Fn(&SceneOutcome) -> &Vec<f64>) -> Vec<(usize, f64, usize)> {
     let max = outcomes.iter().map(|o| get(o).len()).max().unwrap_or(0);
     (0..max)
         .map(|k| {
-            let vals: Vec<f64> = outcomes.iter().filter_map(|o| get(o).get(k).copied()).filter(|v| v.is_finite()).collect();
+            let vals: Vec<f64> = outcomes
+                .iter()
+                .filter_map(|o| get(o).get(k).copied())
+                .filter(|v| v.is_finite())
+                .collect();
             let n = vals.len();
-            (k + 1, if n == 0 { f64::NAN } else { vals.iter().sum::<f64>() / n as f64 }, n)
+            (
+                k + 1,
+                if n == 0 {
+                    f64::NAN
+                } else {
+                    vals.iter().sum::<f64>() / n as f64
+                },
+                n,
+            )
         })
         .collect()
 }
@@ -139,7 +162,10 @@ pub fn summarise(outcomes: &[SceneOutcome]) -> Summary {
     let errs: Vec<_> = outcomes.iter().filter_map(|o| o.result.errors.as_ref()).collect();
     let n = outcomes.len();
     let accurate = outcomes.iter().filter(|o| accuracy_measure(o) < 0.1).count();
-    let ious: Vec<f64> = outcomes.iter().flat_map(|o| o.result.views.iter().map(|v| v.iou)).collect();
+    let ious: Vec<f64> = outcomes
+        .iter()
+        .flat_map(|o| o.result.views.iter().map(|v| v.iou))
+        .collect();
     let grasps_total: usize = outcomes.iter().map(|o| o.grasps_total).sum();
     let grasps_correct: usize = outcomes.iter().map(|o| o.grasps_correct).sum();
     Summary {
@@ -150,7 +176,11 @@ pub fn summarise(outcomes: &[SceneOutcome]) -> Summary {
         median_translation: median(errs.iter().map(|e| e.translation).collect()),
         median_scale_error: median(errs.iter().map(|e| e.scale).collect()),
         median_add_rel: median(outcomes.iter().map(accuracy_measure).collect()),
-        mean_iou: if ious.is_empty() { 0.0 } else { ious.iter().sum::<f64>() / ious.len() as f64 },
+        mean_iou: if ious.is_empty() {
+            0.0
+        } else {
+            ious.iter().sum::<f64>() / ious.len() as f64
+        },
         grasp_accuracy: (grasps_total > 0).then(|| grasps_correct as f64 / grasps_total as f64),
         loss_by_views: by_views(outcomes, |o| &o.loss_by_views),
         add_rel_by_views: by_views(outcomes, |o| &o.add_rel_by_views),
@@ -282,7 +312,14 @@ mod tests {
             result: FitResult {
                 pose: PoseOut::from_pose(&crate::Pose::IDENTITY),
                 matrix: [[0.0; 4]; 4],
-                views: ious.iter().map(|&iou| ViewResult { name: "v".into(), iou, hausdorff_px: 1.0 }).collect(),
+                views: ious
+                    .iter()
+                    .map(|&iou| ViewResult {
+                        name: "v".into(),
+                        iou,
+                        hausdorff_px: 1.0,
+                    })
+                    .collect(),
                 mean_iou: ious.iter().sum::<f64>() / ious.len() as f64,
                 loss_history: vec![],
                 iterations: 1,
@@ -301,7 +338,10 @@ mod tests {
     #[test]
     fn precision_recall_counts() {
         // Views: IoU 0.9 (TP at all), 0.6 (TP at .25/.5), 0.3 with an empty render (no prediction).
-        let o = vec![outcome(&[0.9, 0.6, 0.3], &[100, 100, 0], 0.05), outcome(&[0.2], &[50], 0.5)];
+        let o = vec![
+            outcome(&[0.9, 0.6, 0.3], &[100, 100, 0], 0.05),
+            outcome(&[0.2], &[50], 0.5),
+        ];
         let s = summarise(&o);
         let at = |t: f64| s.prf.iter().find(|r| r.threshold == t).unwrap().clone();
         let r = at(0.25);

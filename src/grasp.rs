@@ -401,7 +401,10 @@ pub fn draw_grasp(img: &mut Rgba, rect: &[DVec2; 4], colour: [u8; 4]) {
 /// The 2-D rectangles of `grasps` transferred with `pose` into `camera` (grasps
 /// behind the camera left out).
 pub fn rectangles(grasps: &[Grasp], pose: &Pose, camera: &Camera) -> Vec<[DVec2; 4]> {
-    grasps.iter().filter_map(|g| grasp_rectangle(&g.to_world(pose), camera)).collect()
+    grasps
+        .iter()
+        .filter_map(|g| grasp_rectangle(&g.to_world(pose), camera))
+        .collect()
 }
 
 /// Draws `grasps`, transferred with `pose` into `camera`, over an overlay (cyan).

@@ -55,10 +55,46 @@ impl StageSettings {
     pub fn default_schedule() -> Vec<StageSettings> {
         let lm = Optimiser::LevenbergMarquardt;
         vec![
-            StageSettings { resolution: 64, sigma: 1.0, iterations: 25, lr_start: 1.0, lr_end: 0.3, keep: 3, contour: false, optimiser: lm },
-            StageSettings { resolution: 128, sigma: 0.3, iterations: 20, lr_start: 0.4, lr_end: 0.1, keep: 1, contour: true, optimiser: lm },
-            StageSettings { resolution: 256, sigma: 0.05, iterations: 15, lr_start: 0.15, lr_end: 0.05, keep: 1, contour: true, optimiser: lm },
-            StageSettings { resolution: 256, sigma: 0.02, iterations: 10, lr_start: 0.05, lr_end: 0.01, keep: 1, contour: true, optimiser: lm },
+            StageSettings {
+                resolution: 64,
+                sigma: 1.0,
+                iterations: 25,
+                lr_start: 1.0,
+                lr_end: 0.3,
+                keep: 3,
+                contour: false,
+                optimiser: lm,
+            },
+            StageSettings {
+                resolution: 128,
+                sigma: 0.3,
+                iterations: 20,
+                lr_start: 0.4,
+                lr_end: 0.1,
+                keep: 1,
+                contour: true,
+                optimiser: lm,
+            },
+            StageSettings {
+                resolution: 256,
+                sigma: 0.05,
+                iterations: 15,
+                lr_start: 0.15,
+                lr_end: 0.05,
+                keep: 1,
+                contour: true,
+                optimiser: lm,
+            },
+            StageSettings {
+                resolution: 256,
+                sigma: 0.02,
+                iterations: 10,
+                lr_start: 0.05,
+                lr_end: 0.01,
+                keep: 1,
+                contour: true,
+                optimiser: lm,
+            },
         ]
     }
 }
@@ -108,7 +144,10 @@ impl RefineTarget {
             .collect();
         RefineTarget {
             views,
-            soft: SoftSettings { sigma: stage.sigma, eps: 1e-4 },
+            soft: SoftSettings {
+                sigma: stage.sigma,
+                eps: 1e-4,
+            },
             lambda_iou,
             lambda_contour: if stage.contour { lambda_contour } else { 0.0 },
         }

@@ -83,7 +83,11 @@ impl Estimator {
             .views()
             .iter()
             .zip(&figs)
-            .map(|(v, f)| ViewResult { name: v.name.clone(), iou: f.0, hausdorff_px: f.1 })
+            .map(|(v, f)| ViewResult {
+                name: v.name.clone(),
+                iou: f.0,
+                hausdorff_px: f.1,
+            })
             .collect();
         let mean_iou = views.iter().map(|v| v.iou).sum::<f64>() / views.len().max(1) as f64;
         FitResult {

@@ -35,7 +35,15 @@ pub struct SynthSettings {
 
 impl Default for SynthSettings {
     fn default() -> Self {
-        SynthSettings { views: 4, width: 256, height: 256, seed: 0, max_log_scale: 0.2, fill: 0.7, images: false }
+        SynthSettings {
+            views: 4,
+            width: 256,
+            height: 256,
+            seed: 0,
+            max_log_scale: 0.2,
+            fill: 0.7,
+            images: false,
+        }
     }
 }
 
@@ -69,7 +77,10 @@ pub fn random_rotation(rng: &mut SmallRng) -> DMat3 {
 /// A random pose for `mesh`: uniform rotation, per-axis scale within
 /// `exp(±max_log_scale)`, and the object's centre within a tenth of its radius of the origin.
 pub fn random_pose(mesh: &Mesh, max_log_scale: f64, rng: &mut SmallRng) -> Pose {
-    let b = mesh.bounds().unwrap_or(crate::mesh::Bounds { min: DVec3::ZERO, max: DVec3::ZERO });
+    let b = mesh.bounds().unwrap_or(crate::mesh::Bounds {
+        min: DVec3::ZERO,
+        max: DVec3::ZERO,
+    });
     let radius = (b.size().length() * 0.5).max(1e-9);
     let rotation = random_rotation(rng);
     let scale = DVec3::new(
@@ -77,15 +88,27 @@ pub fn random_pose(mesh: &Mesh, max_log_scale: f64, rng: &mut SmallRng) -> Pose 
         rng.gen_range(-max_log_scale..=max_log_scale).exp(),
         rng.gen_range(-max_log_scale..=max_log_scale).exp(),
     );
-    let jitter = DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)) * 0.1 * radius;
+    let jitter = DVec3::new(
+        rng.gen_range(-1.0..1.0),
+        rng.gen_range(-1.0..1.0),
+        rng.gen_range(-1.0..1.0),
+    ) * 0.1
+        * radius;
     let translation = -(rotation * (scale * b.centre())) + jitter;
-    Pose { rotation, translation, scale }
+    Pose {
+        rotation,
+        translation,
+        scale,
+    }
 }
 
 /// Makes a synthetic scene of `mesh` at `pose` (random when `None`).
 pub fn synthesize(mesh: &Mesh, settings: &SynthSettings, pose: Option<Pose>) -> Result<SynthScene> {
     if settings.views == 0 || settings.views > 64 {
-        return Err(Error::Settings(format!("views must be between 1 and 64, got {}", settings.views)));
+        return Err(Error::Settings(format!(
+            "views must be between 1 and 64, got {}",
+            settings.views
+        )));
     }
     if settings.width < 8 || settings.height < 8 {
         return Err(Error::Settings("width and height must be at least 8 pixels".into()));
@@ -96,10 +119,18 @@ pub fn synthesize(mesh: &Mesh, settings: &SynthSettings, pose: Option<Pose>) -> 
         None => random_pose(mesh, settings.max_log_scale, &mut rng),
     };
     pose.validate()?;
-    let b = mesh.bounds().ok_or_else(|| Error::Mesh { file: "mesh".into(), problem: "has no vertices".into() })?;
+    let b = mesh.bounds().ok_or_else(|| Error::Mesh {
+        file: "mesh".into(),
+        problem: "has no vertices".into(),
+    })?;
     // World-space bounding sphere of the posed mesh.
     let centre = pose.apply(b.centre());
-    let radius = mesh.positions.iter().map(|p| pose.apply(*p).distance(centre)).fold(0.0, f64::max).max(1e-9);
+    let radius = mesh
+        .positions
+        .iter()
+        .map(|p| pose.apply(*p).distance(centre))
+        .fold(0.0, f64::max)
+        .max(1e-9);
     let (w, h) = (settings.width, settings.height);
     let f = 1.1 * w.max(h) as f64;
     let half = 0.5 * w.min(h) as f64 * settings.fill;
@@ -112,7 +143,11 @@ pub fn synthesize(mesh: &Mesh, settings: &SynthSettings, pose: Option<Pose>) -> 
         let dir = DVec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin());
         // Distance at which the bounding sphere spans `half` pixels, with some variety.
         let mut dist = radius * (1.0 + (f / half).powi(2)).sqrt() * rng.gen_range(1.0..1.3);
-        let up = if el.abs() > 80f64.to_radians() { DVec3::Z } else { DVec3::Y };
+        let up = if el.abs() > 80f64.to_radians() {
+            DVec3::Z
+        } else {
+            DVec3::Y
+        };
         let mut tries = 0;
         loop {
             let cam = Camera::look_at(centre + dir * dist, centre, up, w, h, f);
@@ -125,16 +160,27 @@ pub fn synthesize(mesh: &Mesh, settings: &SynthSettings, pose: Option<Pose>) -> 
             tries += 1;
             dist *= 1.25;
             if tries > 20 {
-                return Err(Error::View { view: format!("view{i}"), problem: "could not fit the object inside the canvas".into() });
+                return Err(Error::View {
+                    view: format!("view{i}"),
+                    problem: "could not fit the object inside the canvas".into(),
+                });
             }
         }
     }
     let images = if settings.images {
-        cameras.iter().map(|c| render_shaded(mesh, &pose, c, [230, 190, 40])).collect()
+        cameras
+            .iter()
+            .map(|c| render_shaded(mesh, &pose, c, [230, 190, 40]))
+            .collect()
     } else {
         Vec::new()
     };
-    Ok(SynthScene { pose, cameras, masks, images })
+    Ok(SynthScene {
+        pose,
+        cameras,
+        masks,
+        images,
+    })
 }
 
 /// A closed, asymmetric, bumpy "blob" (a deformed UV sphere of radius about 1) with
@@ -197,16 +243,36 @@ mod tests {
     #[test]
     fn synthetic_scene_keeps_the_object_inside_every_view() {
         let m = blob_mesh(11, 25);
-        let s = synthesize(&m, &SynthSettings { views: 5, width: 96, height: 64, seed: 3, ..Default::default() }, None)
-            .unwrap();
+        let s = synthesize(
+            &m,
+            &SynthSettings {
+                views: 5,
+                width: 96,
+                height: 64,
+                seed: 3,
+                ..Default::default()
+            },
+            None,
+        )
+        .unwrap();
         assert_eq!(s.cameras.len(), 5);
         for (c, k) in s.cameras.iter().zip(&s.masks) {
             assert!(k.area() > 100 && !k.touches_border());
             assert!(c.to_camera(s.pose.translation).z > 0.0);
         }
         // Deterministic for a seed.
-        let again = synthesize(&m, &SynthSettings { views: 5, width: 96, height: 64, seed: 3, ..Default::default() }, None)
-            .unwrap();
+        let again = synthesize(
+            &m,
+            &SynthSettings {
+                views: 5,
+                width: 96,
+                height: 64,
+                seed: 3,
+                ..Default::default()
+            },
+            None,
+        )
+        .unwrap();
         assert_eq!(again.pose, s.pose);
     }
 }

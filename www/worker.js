@@ -1,6 +1,6 @@
 // The fit's home: a module Web Worker that owns the wasm Session, so the page never
 // waits for it. Messages in: load {files}, example, start, pause, step, reset,
-// result. Messages out: loaded {views}, frame {progress, losses, overlays, running},
+// result. Messages out: loaded {views, warnings}, frame {progress, losses, overlays, running},
 // result {json}, error {message, fatal}.
 import init, { FileSet, Session, checkMesh } from './pkg/localisebot.js';
 import { planScene } from './files.js';
@@ -32,17 +32,22 @@ function fileSet(files) {
 function load(files) {
   running = false;
   const plan = planScene(files);
-  if (plan.meshOnly) {
-    const { path, bytes } = plan.meshOnly;
-    const triangles = checkMesh(path, bytes, fileSet(files)); // throws on a bad mesh
-    throw new Error(
-      `${path}: a valid mesh (${triangles} triangles), but there is no scene: ` +
-        'add a scene.json (or one camera .json per view) and the masks',
-    );
+  const set = fileSet(files);
+  try {
+    if (plan.meshOnly) {
+      const { path, bytes } = plan.meshOnly;
+      const triangles = checkMesh(path, bytes, set); // throws on a bad mesh
+      throw new Error(
+        `${path}: a valid mesh (${triangles} triangles), but there is no scene: ` +
+          'add a scene.json (or one camera .json per view) and the masks',
+      );
+    }
+    const next = Session.fromScene(plan.sceneFile, plan.sceneText, set);
+    session?.free();
+    session = next;
+  } finally {
+    set.free();
   }
-  const next = Session.fromScene(plan.sceneFile, plan.sceneText, fileSet(files));
-  session?.free();
-  session = next;
   post({ type: 'loaded', views: session.views(), warnings: session.warnings(), source: plan.sceneFile });
   frame();
 }

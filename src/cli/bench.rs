@@ -57,7 +57,12 @@ pub fn run(a: &BenchArgs) -> CliResult {
     if let Some(scene_path) = &a.scene {
         let scene = load_scene_file(scene_path)?;
         let pose = load_pose(a.pose.as_ref().expect("clap requires --pose with --scene"))?;
-        let size = scene.views.iter().map(|v| v.camera.width.max(v.camera.height)).max().unwrap_or(0);
+        let size = scene
+            .views
+            .iter()
+            .map(|v| v.camera.width.max(v.camera.height))
+            .max()
+            .unwrap_or(0);
         let ms = time_fwd_bwd(&scene.mesh, &scene.views, &pose, size, a.sigma, reps);
         rows.push(Row {
             mesh: scene_path.display().to_string(),
@@ -79,7 +84,13 @@ pub fn run(a: &BenchArgs) -> CliResult {
         ];
         for (name, mesh) in &meshes {
             for size in [128u32, 256] {
-                let synth = SynthSettings { views: 4, width: size, height: size, seed: 11, ..Default::default() };
+                let synth = SynthSettings {
+                    views: 4,
+                    width: size,
+                    height: size,
+                    seed: 11,
+                    ..Default::default()
+                };
                 let s = synthesize(mesh, &synth, None).map_err(|e| e.to_string())?;
                 let views = to_views(&s.cameras, &s.masks);
                 let ms = time_fwd_bwd(mesh, &views, &s.pose, size, a.sigma, reps);
@@ -116,7 +127,12 @@ fn to_views(cameras: &[localisebot::Camera], masks: &[localisebot::Mask]) -> Vec
         .iter()
         .zip(masks)
         .enumerate()
-        .map(|(i, (c, m))| View { name: format!("view{i}"), camera: *c, mask: m.clone(), image: None })
+        .map(|(i, (c, m))| View {
+            name: format!("view{i}"),
+            camera: *c,
+            mask: m.clone(),
+            image: None,
+        })
         .collect()
 }
 
@@ -134,7 +150,10 @@ fn time_fwd_bwd(mesh: &Mesh, views: &[View], pose: &Pose, size: u32, sigma: f64,
     };
     let mut target = RefineTarget::new(views, &stage, 1.0, 0.0);
     // A pose slightly off the truth, as during a fit.
-    let p = Pose { translation: pose.translation + glam::DVec3::splat(0.01), ..*pose };
+    let p = Pose {
+        translation: pose.translation + glam::DVec3::splat(0.01),
+        ..*pose
+    };
     target.loss_and_gradient(mesh, &p); // warm the buffers
     let mut times: Vec<f64> = (0..reps)
         .map(|_| {
@@ -164,7 +183,10 @@ fn print_rows(rows: &[Row], json: bool) {
         }
         return;
     }
-    println!("{:<28} {:>9} {:>5} {:>6} {:>7} {:>12} {:>8} {:>9}", "mesh", "triangles", "views", "size", "sigma", "fwd+bwd ms", "fit s", "fit ADD");
+    println!(
+        "{:<28} {:>9} {:>5} {:>6} {:>7} {:>12} {:>8} {:>9}",
+        "mesh", "triangles", "views", "size", "sigma", "fwd+bwd ms", "fit s", "fit ADD"
+    );
     for r in rows {
         let fit = r.fit_s.map_or("-".to_string(), |s| format!("{s:.2}"));
         let add = r.fit_add_rel.map_or("-".to_string(), |s| format!("{:.2}%", 100.0 * s));

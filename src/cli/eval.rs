@@ -111,20 +111,29 @@ fn discover(dirs: &[PathBuf]) -> CliResult<Vec<PathBuf>> {
 }
 
 fn scene_name(path: &Path) -> String {
-    path.parent().and_then(|p| p.file_name()).map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into())
+    path.parent()
+        .and_then(|p| p.file_name())
+        .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into())
 }
 
 fn fit(scene: &Scene, views: usize, settings: &FitSettings) -> CliResult<(Estimator, f64)> {
     let start = Instant::now();
-    let mut est = Estimator::new(scene.mesh.clone(), scene.views[..views].to_vec(), scene.initial_pose, settings.clone())
-        .map_err(|e| e.to_string())?;
+    let mut est = Estimator::new(
+        scene.mesh.clone(),
+        scene.views[..views].to_vec(),
+        scene.initial_pose,
+        settings.clone(),
+    )
+    .map_err(|e| e.to_string())?;
     est.run(usize::MAX);
     Ok((est, start.elapsed().as_secs_f64()))
 }
 
 fn evaluate_scene(path: &Path, settings: &FitSettings, curve: bool) -> CliResult<Option<SceneOutcome>> {
     let scene = load_scene_file(path)?;
-    let Some(gt) = scene.ground_truth_pose else { return Ok(None) };
+    let Some(gt) = scene.ground_truth_pose else {
+        return Ok(None);
+    };
     let symmetric = is_symmetric(&scene.mesh);
     let n = scene.views.len();
     let (est, secs) = fit(&scene, n, settings).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -135,7 +144,11 @@ fn evaluate_scene(path: &Path, settings: &FitSettings, curve: bool) -> CliResult
     let mut add_rel_by_views = Vec::new();
     if curve {
         for k in 1..=n {
-            let (e, s) = if k == n { (None, secs) } else { (Some(fit(&scene, k, settings)?), 0.0) };
+            let (e, s) = if k == n {
+                (None, secs)
+            } else {
+                (Some(fit(&scene, k, settings)?), 0.0)
+            };
             let (est_k, secs_k) = match &e {
                 Some((est_k, s)) => (est_k, *s),
                 None => (&est, s),
@@ -190,7 +203,11 @@ fn print_table(s: &Summary) {
     for r in &s.prf {
         println!("{:5}  {:9.3}  {:6.3}  {:5.3}", r.threshold, r.precision, r.recall, r.f1);
     }
-    println!("ADD(-S) < 10% of diameter: {:.1}% of {} scenes", 100.0 * s.add_accuracy, s.scenes);
+    println!(
+        "ADD(-S) < 10% of diameter: {:.1}% of {} scenes",
+        100.0 * s.add_accuracy,
+        s.scenes
+    );
     println!(
         "median rotation {:.2} deg, scale error {:.2}%, ADD(-S) {:.2}% of diameter",
         s.median_rotation_deg,
@@ -207,8 +224,18 @@ fn plot_err<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> String + '_ {
 }
 
 fn plot_views(s: &Summary, path: &Path) -> CliResult {
-    let pts: Vec<(f64, f64)> = s.loss_by_views.iter().filter(|p| p.1.is_finite()).map(|p| (p.0 as f64, p.1)).collect();
-    let add: Vec<(f64, f64)> = s.add_rel_by_views.iter().filter(|p| p.1.is_finite()).map(|p| (p.0 as f64, 100.0 * p.1)).collect();
+    let pts: Vec<(f64, f64)> = s
+        .loss_by_views
+        .iter()
+        .filter(|p| p.1.is_finite())
+        .map(|p| (p.0 as f64, p.1))
+        .collect();
+    let add: Vec<(f64, f64)> = s
+        .add_rel_by_views
+        .iter()
+        .filter(|p| p.1.is_finite())
+        .map(|p| (p.0 as f64, 100.0 * p.1))
+        .collect();
     let e = plot_err(path);
     let root = SVGBackend::new(path, (720, 360)).into_drawing_area();
     root.fill(&WHITE).map_err(&e)?;
@@ -222,9 +249,14 @@ fn plot_views(s: &Summary, path: &Path) -> CliResult {
         .y_label_area_size(55)
         .build_cartesian_2d(0.5..max_v, 0.0..max_l)
         .map_err(&e)?;
-    c.configure_mesh().x_desc("views used").y_desc("mean final loss").draw().map_err(&e)?;
+    c.configure_mesh()
+        .x_desc("views used")
+        .y_desc("mean final loss")
+        .draw()
+        .map_err(&e)?;
     c.draw_series(LineSeries::new(pts.clone(), &BLUE)).map_err(&e)?;
-    c.draw_series(pts.iter().map(|p| Circle::new(*p, 4, BLUE.filled()))).map_err(&e)?;
+    c.draw_series(pts.iter().map(|p| Circle::new(*p, 4, BLUE.filled())))
+        .map_err(&e)?;
     let max_a = add.iter().map(|p| p.1).fold(1.0, f64::max) * 1.1;
     let mut c = ChartBuilder::on(&right)
         .caption("ADD(-S) against views", ("sans-serif", 16))
@@ -233,9 +265,14 @@ fn plot_views(s: &Summary, path: &Path) -> CliResult {
         .y_label_area_size(55)
         .build_cartesian_2d(0.5..max_v, 0.0..max_a)
         .map_err(&e)?;
-    c.configure_mesh().x_desc("views used").y_desc("mean ADD(-S), % of diameter").draw().map_err(&e)?;
+    c.configure_mesh()
+        .x_desc("views used")
+        .y_desc("mean ADD(-S), % of diameter")
+        .draw()
+        .map_err(&e)?;
     c.draw_series(LineSeries::new(add.clone(), &RED)).map_err(&e)?;
-    c.draw_series(add.iter().map(|p| Circle::new(*p, 4, RED.filled()))).map_err(&e)?;
+    c.draw_series(add.iter().map(|p| Circle::new(*p, 4, RED.filled())))
+        .map_err(&e)?;
     root.present().map_err(&e)?;
     Ok(())
 }
@@ -250,7 +287,12 @@ fn plot_errors(outcomes: &[SceneOutcome], path: &Path) -> CliResult {
         v.iter().enumerate().map(|(i, x)| (*x, (i + 1) as f64 / n)).collect()
     };
     let add = cumulative(outcomes.iter().map(|o| 100.0 * accuracy_measure(o)).collect());
-    let rot = cumulative(outcomes.iter().filter_map(|o| o.result.errors.as_ref().map(|e| e.rotation_deg)).collect());
+    let rot = cumulative(
+        outcomes
+            .iter()
+            .filter_map(|o| o.result.errors.as_ref().map(|e| e.rotation_deg))
+            .collect(),
+    );
     let root = SVGBackend::new(path, (720, 360)).into_drawing_area();
     root.fill(&WHITE).map_err(&e)?;
     let (left, right) = root.split_horizontally(360);
@@ -265,7 +307,11 @@ fn plot_errors(outcomes: &[SceneOutcome], path: &Path) -> CliResult {
             .y_label_area_size(45)
             .build_cartesian_2d(0.0..xmax, 0.0..1.0)
             .map_err(&e)?;
-        c.configure_mesh().x_desc(xdesc).y_desc("fraction of scenes").draw().map_err(&e)?;
+        c.configure_mesh()
+            .x_desc(xdesc)
+            .y_desc("fraction of scenes")
+            .draw()
+            .map_err(&e)?;
         let mut steps = vec![(0.0, 0.0)];
         for (x, y) in data.iter() {
             let x = x.min(xmax);

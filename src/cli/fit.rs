@@ -97,7 +97,10 @@ pub fn run(a: &FitArgs) -> CliResult {
     let settings = a.options.settings()?;
     let scene = load_scene_file(&a.scene)?;
     if scene.views.len() == 1 {
-        eprintln!("warning: {}: only one view: depth and scale cannot be told apart from one view", a.scene.display());
+        eprintln!(
+            "warning: {}: only one view: depth and scale cannot be told apart from one view",
+            a.scene.display()
+        );
     }
     let initial = match &a.initial_pose {
         Some(p) => Some(load_pose(p)?),

@@ -135,7 +135,10 @@ fn find_transforms(dir: &Path) -> CliResult<String> {
         .filter(|n| n.starts_with("transforms") && n.ends_with(".json"))
         .collect();
     names.sort();
-    names.into_iter().next().ok_or_else(|| format!("{}: no transforms*.json found", dir.display()))
+    names
+        .into_iter()
+        .next()
+        .ok_or_else(|| format!("{}: no transforms*.json found", dir.display()))
 }
 
 fn finish(imported: Imported, out: &Path) -> CliResult {
@@ -146,6 +149,10 @@ fn finish(imported: Imported, out: &Path) -> CliResult {
         write(&out.join(rel), bytes)?;
     }
     write(&out.join("scene.json"), imported.scene.to_json_string().as_bytes())?;
-    eprintln!("wrote {} ({} views)", out.join("scene.json").display(), imported.scene.views.len());
+    eprintln!(
+        "wrote {} ({} views)",
+        out.join("scene.json").display(),
+        imported.scene.views.len()
+    );
     Ok(())
 }

@@ -6,7 +6,9 @@ use std::path::Path;
 /// Prints `{"vertices", "triangles", "bounds": {"min", "max"}}`.
 pub fn run(path: &Path) -> CliResult {
     let mesh = load_mesh(path)?;
-    let b = mesh.bounds().ok_or_else(|| format!("{}: mesh has no vertices", path.display()))?;
+    let b = mesh
+        .bounds()
+        .ok_or_else(|| format!("{}: mesh has no vertices", path.display()))?;
     let out = serde_json::json!({
         "vertices": mesh.positions.len(),
         "triangles": mesh.triangles.len(),

@@ -35,7 +35,14 @@ pub fn run(a: &LossArgs) -> CliResult {
     }
     let scene = load_scene_file(&a.scene)?;
     let pose = load_pose(&a.pose)?;
-    let size = a.size.unwrap_or_else(|| scene.views.iter().map(|v| v.camera.width.max(v.camera.height)).max().unwrap_or(8));
+    let size = a.size.unwrap_or_else(|| {
+        scene
+            .views
+            .iter()
+            .map(|v| v.camera.width.max(v.camera.height))
+            .max()
+            .unwrap_or(8)
+    });
     if size < 8 {
         return Err(format!("--size must be at least 8, got {size}"));
     }

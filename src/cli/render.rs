@@ -19,9 +19,17 @@ pub fn run(scene: &Path, pose: &Path, out: &Path) -> CliResult {
         write(&path, &encode_rgba(&img))?;
         if !scene.grasps.is_empty() {
             let rects = grasp::rectangles(&scene.grasps, &pose, &v.camera);
-            write(&out.join(format!("{}.grasps.txt", v.name)), grasp::rectangles_to_txt(&rects).as_bytes())?;
+            write(
+                &out.join(format!("{}.grasps.txt", v.name)),
+                grasp::rectangles_to_txt(&rects).as_bytes(),
+            )?;
         }
-        println!("{}: IoU {:.4} -> {}", v.name, metrics::hard_iou(&rendered, &v.mask), path.display());
+        println!(
+            "{}: IoU {:.4} -> {}",
+            v.name,
+            metrics::hard_iou(&rendered, &v.mask),
+            path.display()
+        );
     }
     Ok(())
 }

@@ -3,8 +3,8 @@
 
 use super::files::{load_mesh, load_pose, read, write, CliResult};
 use clap::Args;
-use localisebot::io::png::{encode_gray, encode_rgba};
 use localisebot::grasp::antipodal_grasps;
+use localisebot::io::png::{encode_gray, encode_rgba};
 use localisebot::synth::{synthesize, SynthSettings};
 use localisebot::{CameraJson, PoseJson, SceneJson, ViewJson};
 use std::path::{Path, PathBuf};
@@ -30,8 +30,8 @@ pub struct SynthArgs {
     /// Pose file to render at, instead of a random pose.
     #[arg(long)]
     pose: Option<PathBuf>,
-    /// Add this many antipodal grasp candidates (pairs of opposed surface points
-    /// within a gripper opening of half the object's diameter) to the scene.
+    /// Add this many antipodal grasp candidates (pairs of opposed surface points no
+    /// farther apart than the object's diameter) to the scene.
     #[arg(long, default_value_t = 0)]
     grasps: usize,
     /// Also write shaded renders as the views' images.
@@ -46,9 +46,25 @@ pub struct SynthArgs {
 pub fn run(a: &SynthArgs) -> CliResult {
     let mesh = load_mesh(&a.mesh)?;
     let pose = a.pose.as_deref().map(load_pose).transpose()?;
-    let settings = SynthSettings { views: a.views, width: a.width, height: a.height, seed: a.seed, images: a.images, ..Default::default() };
+    let settings = SynthSettings {
+        views: a.views,
+        width: a.width,
+        height: a.height,
+        seed: a.seed,
+        images: a.images,
+        ..Default::default()
+    };
     let scene = synthesize(&mesh, &settings, pose).map_err(|e| e.to_string())?;
     let mesh_name = copy_mesh(&a.mesh, &a.out)?;
+    let grasps = antipodal_grasps(&mesh, mesh.diameter(), a.grasps, a.seed);
+    if grasps.len() < a.grasps {
+        eprintln!(
+            "warning: {}: found {} of {} antipodal grasps",
+            a.mesh.display(),
+            grasps.len(),
+            a.grasps
+        );
+    }
     let mut views = Vec::new();
     for (i, (cam, mask)) in scene.cameras.iter().zip(&scene.masks).enumerate() {
         let name = format!("view{i}");
@@ -63,7 +79,12 @@ pub fn run(a: &SynthArgs) -> CliResult {
             }
             None => None,
         };
-        views.push(ViewJson { name, image, mask: rel, camera: CameraJson::from_camera(cam) });
+        views.push(ViewJson {
+            name,
+            image,
+            mask: rel,
+            camera: CameraJson::from_camera(cam),
+        });
     }
     let json = SceneJson {
         version: 1,
@@ -71,17 +92,25 @@ pub fn run(a: &SynthArgs) -> CliResult {
         views,
         initial_pose: None,
         ground_truth_pose: Some(PoseJson::from_pose(&scene.pose)),
-        grasps: antipodal_grasps(&mesh, 0.5 * mesh.diameter(), a.grasps, a.seed).iter().map(|g| g.to_json()).collect(),
+        grasps: grasps.iter().map(|g| g.to_json()).collect(),
     };
     write(&a.out.join("scene.json"), json.to_json_string().as_bytes())?;
-    eprintln!("wrote {} ({} views)", a.out.join("scene.json").display(), scene.cameras.len());
+    eprintln!(
+        "wrote {} ({} views)",
+        a.out.join("scene.json").display(),
+        scene.cameras.len()
+    );
     Ok(())
 }
 
 /// Copies the mesh file, and a `.gltf`'s external buffers and images, into `out`.
 /// Returns the mesh's name relative to `out`.
 pub(super) fn copy_mesh(mesh: &Path, out: &Path) -> CliResult<String> {
-    let name = mesh.file_name().ok_or_else(|| format!("{}: not a file", mesh.display()))?.to_string_lossy().to_string();
+    let name = mesh
+        .file_name()
+        .ok_or_else(|| format!("{}: not a file", mesh.display()))?
+        .to_string_lossy()
+        .to_string();
     let bytes = read(mesh)?;
     write(&out.join(&name), &bytes)?;
     if name.to_ascii_lowercase().ends_with(".gltf") {

@@ -534,7 +534,7 @@ mod tests {
             .collect();
         let ix = indices.unwrap_or(&[]);
         bin.extend(ix.iter().flat_map(|i| i.to_le_bytes()));
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let b64 = base64::engine::general_purpose::STANDARD.encode(&bin);

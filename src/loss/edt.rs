@@ -110,7 +110,7 @@ mod tests {
             let seed: Vec<bool> = (0..w * h)
                 .map(|_| {
                     state = state.wrapping_mul(1664525).wrapping_add(1013904223);
-                    (state >> 24) % density == 0
+                    (state >> 24).is_multiple_of(density)
                 })
                 .collect();
             assert_eq!(squared_distance(w, h, &seed), brute(w, h, &seed));

@@ -21,7 +21,14 @@ pub struct AdamSettings {
 
 impl Default for AdamSettings {
     fn default() -> Self {
-        AdamSettings { lr_rotation: 0.03, lr_translation: 0.03, lr_log_scale: 0.02, beta1: 0.9, beta2: 0.999, eps: 1e-8 }
+        AdamSettings {
+            lr_rotation: 0.03,
+            lr_translation: 0.03,
+            lr_log_scale: 0.02,
+            beta1: 0.9,
+            beta2: 0.999,
+            eps: 1e-8,
+        }
     }
 }
 
@@ -85,7 +92,12 @@ mod tests {
         let c = [0.3, -0.2, 0.1, 0.5, -0.4, 0.2, 0.1, 0.05, -0.1];
         let mut x = [0.0; 9];
         let mut a = Adam::new();
-        let s = AdamSettings { lr_rotation: 0.02, lr_translation: 0.02, lr_log_scale: 0.02, ..Default::default() };
+        let s = AdamSettings {
+            lr_rotation: 0.02,
+            lr_translation: 0.02,
+            lr_log_scale: 0.02,
+            ..Default::default()
+        };
         for it in 0..2000 {
             let g: Vec<f64> = x.iter().zip(c).map(|(x, c)| 2.0 * (x - c)).collect();
             let d = a.update(&g.try_into().unwrap(), &s, 0.999f64.powi(it));

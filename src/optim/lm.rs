@@ -20,7 +20,10 @@ pub struct Lm {
 
 impl Default for Lm {
     fn default() -> Self {
-        Lm { lambda: 1e-2, accepted: None }
+        Lm {
+            lambda: 1e-2,
+            accepted: None,
+        }
     }
 }
 
@@ -44,9 +47,15 @@ impl Lm {
     /// Given the normal equations `ne` (scaled parameters) evaluated at `pose`, returns
     /// the pose to evaluate next. A pose whose cost is higher than the last accepted
     /// one is rejected: λ grows and the step is re-solved from the accepted pose.
-    pub fn next_pose(&mut self, pose: Pose, ne: NormalEquations, free: Free, apply: impl Fn(&Pose, &[f64; 9]) -> Pose) -> Pose {
+    pub fn next_pose(
+        &mut self,
+        pose: Pose,
+        ne: NormalEquations,
+        free: Free,
+        apply: impl Fn(&Pose, &[f64; 9]) -> Pose,
+    ) -> Pose {
         match &self.accepted {
-            Some((_, prev)) if !(ne.cost < prev.cost) => self.lambda = (self.lambda * 4.0).min(1e8),
+            Some((_, prev)) if ne.cost.partial_cmp(&prev.cost) != Some(std::cmp::Ordering::Less) => self.lambda = (self.lambda * 4.0).min(1e8),
             _ => {
                 self.lambda = (self.lambda / 3.0).max(1e-7);
                 self.accepted = Some((pose, ne));
@@ -116,7 +125,9 @@ fn unit(i: usize) -> [f64; 9] {
 fn gauss(mut a: Vec<Vec<f64>>) -> Vec<f64> {
     let k = a.len();
     for col in 0..k {
-        let piv = (col..k).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs())).unwrap_or(col);
+        let piv = (col..k)
+            .max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))
+            .unwrap_or(col);
         a.swap(col, piv);
         let d = a[col][col];
         if d.abs() < 1e-300 {
@@ -126,14 +137,17 @@ fn gauss(mut a: Vec<Vec<f64>>) -> Vec<f64> {
             if row != col {
                 let f = a[row][col] / d;
                 if f != 0.0 {
-                    for c in col..=k {
-                        a[row][c] -= f * a[col][c];
+                    let pivot_row = a[col].clone();
+                    for (x, p) in a[row][col..].iter_mut().zip(&pivot_row[col..]) {
+                        *x -= f * p;
                     }
                 }
             }
         }
     }
-    (0..k).map(|i| if a[i][i].abs() < 1e-300 { 0.0 } else { a[i][k] / a[i][i] }).collect()
+    (0..k)
+        .map(|i| if a[i][i].abs() < 1e-300 { 0.0 } else { a[i][k] / a[i][i] })
+        .collect()
 }
 
 /// Scales normal equations from pose units `[ω, t, ls]` to the optimiser's scaled
@@ -192,7 +206,10 @@ mod tests {
         }
         ne.jtr[3] = 1.0;
         ne.cost = 1.0;
-        let apply = |p: &Pose, d: &[f64; 9]| Pose { translation: p.translation + glam::DVec3::new(d[3], d[4], d[5]), ..*p };
+        let apply = |p: &Pose, d: &[f64; 9]| Pose {
+            translation: p.translation + glam::DVec3::new(d[3], d[4], d[5]),
+            ..*p
+        };
         let p1 = lm.next_pose(Pose::IDENTITY, ne, Free::All, apply);
         assert!(p1.translation.x < 0.0);
         let l1 = lm.lambda;
@@ -201,6 +218,9 @@ mod tests {
         let p2 = lm.next_pose(p1, worse, Free::All, apply);
         assert!(lm.lambda > l1);
         assert_eq!(lm.best(), Some(Pose::IDENTITY));
-        assert!(p2.translation.x > p1.translation.x, "a shorter step from the accepted pose");
+        assert!(
+            p2.translation.x > p1.translation.x,
+            "a shorter step from the accepted pose"
+        );
     }
 }

@@ -82,7 +82,12 @@ pub fn low_res_views(views: &[View], resolution: u32) -> Vec<LowResView> {
             let mask = v.mask.resample(w, h);
             let bits = BitMask::from_mask(&mask);
             let (area, centroid) = stats(&bits);
-            LowResView { camera, bits, area, centroid }
+            LowResView {
+                camera,
+                bits,
+                area,
+                centroid,
+            }
         })
         .collect()
 }
@@ -94,7 +99,10 @@ pub fn fit_size(w: u32, h: u32, max_side: u32) -> (u32, u32) {
         return (w, h);
     }
     let f = max_side as f64 / m as f64;
-    (((w as f64 * f).round() as u32).max(1), ((h as f64 * f).round() as u32).max(1))
+    (
+        ((w as f64 * f).round() as u32).max(1),
+        ((h as f64 * f).round() as u32).max(1),
+    )
 }
 
 /// Area (pixels) and centroid of a bit mask.
@@ -184,7 +192,10 @@ pub fn select_best(mut all: Vec<Candidate>, keep: usize, min_sep_deg: f64) -> Ve
         if out.len() >= keep {
             break;
         }
-        if out.iter().all(|o| so3::geodesic_deg(o.pose.rotation, c.pose.rotation) >= min_sep_deg) {
+        if out
+            .iter()
+            .all(|o| so3::geodesic_deg(o.pose.rotation, c.pose.rotation) >= min_sep_deg)
+        {
             out.push(c);
         }
     }

@@ -32,7 +32,9 @@ pub fn render_shaded(mesh: &Mesh, pose: &Pose, camera: &Camera, colour: [u8; 3])
         if area.abs() < 1e-12 {
             continue;
         }
-        let n = (proj.cam[b] - proj.cam[a]).cross(proj.cam[c] - proj.cam[a]).normalize_or_zero();
+        let n = (proj.cam[b] - proj.cam[a])
+            .cross(proj.cam[c] - proj.cam[a])
+            .normalize_or_zero();
         let shade = 0.25 + 0.75 * n.dot(light).abs();
         let rgb = colour.map(|c| (c as f64 * shade).min(255.0) as u8);
         let (iz_a, iz_b, iz_c) = (1.0 / proj.cam[a].z, 1.0 / proj.cam[b].z, 1.0 / proj.cam[c].z);
@@ -62,5 +64,9 @@ pub fn render_shaded(mesh: &Mesh, pose: &Pose, camera: &Camera, colour: [u8; 3])
             }
         }
     }
-    Rgba { width: camera.width, height: camera.height, data }
+    Rgba {
+        width: camera.width,
+        height: camera.height,
+        data,
+    }
 }

@@ -227,9 +227,10 @@ pub struct SoftRasterizer {
     /// per-field vertex gradients of the fused pass.
     pub(crate) grad_uv: Vec<DVec2>,
     pub(crate) grad_cam: Vec<DVec3>,
-    pub(crate) grad_fields: Vec<DVec2>,
-    /// Gauss–Newton buffer: per-vertex `∂(u, v)/∂θ`.
-    pub(crate) vertex_jac: Vec<[[f64; 9]; 2]>,
+    pub(crate) grad_fields: Vec<wide::f64x2>,
+    /// Gauss–Newton buffer: per-vertex `∂(u, v)/∂θ`, the 9 columns in lane pairs
+    /// (the 10th zero).
+    pub(crate) vertex_jac: Vec<[[wide::f64x2; 5]; 2]>,
 }
 
 impl SoftRasterizer {

@@ -26,6 +26,7 @@ use crate::pose::Pose;
 use crate::raster::soft::{SoftRasterizer, SoftSettings, SoftSilhouette, SATURATION};
 use crate::raster::tiles::{self, Pass, Tile, TILE};
 use glam::{DVec2, DVec3};
+use wide::f64x2;
 
 /// Number of pose parameters.
 pub const POSE_DIM: usize = 9;
@@ -73,9 +74,9 @@ impl SoftSilhouette {
     /// For K per-pixel weight fields W_f (`field(p)` gives the K weights of pixel p),
     /// writes `∂(Σ_p W_f(p)·A_p)/∂v` into `out[v·K + f]` for every vertex v, in the same
     /// sweep that (re)computes the silhouette.
-    pub(crate) fn field_gradients<const K: usize>(&mut self, field: impl Fn(usize) -> [f64; K], out: &mut Vec<DVec2>) {
+    pub(crate) fn field_gradients<const K: usize>(&mut self, field: impl Fn(usize) -> [f64; K], out: &mut Vec<f64x2>) {
         out.clear();
-        out.resize(self.vertex_count * K, DVec2::ZERO);
+        out.resize(self.vertex_count * K, f64x2::ZERO);
         let w = self.width as usize;
         let mut ct = [[0.0f64; K]; TILE * TILE];
         self.run_pass::<true>(|tile| {
@@ -93,9 +94,10 @@ impl SoftSilhouette {
             for r in tile.records {
                 let c = &ct[r.px as usize];
                 let (a, b) = (r.a as usize * K, r.b as usize * K);
+                let (ga, gb) = (f64x2::from(r.ga.to_array()), f64x2::from(r.gb.to_array()));
                 for f in 0..K {
-                    out[a + f] += r.ga * c[f];
-                    out[b + f] += r.gb * c[f];
+                    out[a + f] += ga * c[f];
+                    out[b + f] += gb * c[f];
                 }
             }
         });
@@ -113,7 +115,10 @@ impl SoftSilhouette {
             self.alpha.len(),
             "grad_alpha must have one value per pixel"
         );
-        self.field_gradients(|p| [grad_alpha[p]], grad_uv);
+        let mut buf = Vec::new();
+        self.field_gradients(|p| [grad_alpha[p]], &mut buf);
+        grad_uv.clear();
+        grad_uv.extend(buf.iter().map(|g| DVec2::from_array(g.to_array())));
     }
 }
 
@@ -192,7 +197,7 @@ impl SoftRasterizer {
         self.silhouette.field_gradients(field, &mut buf);
         let mut out = [[0.0; POSE_DIM]; K];
         for (f, o) in out.iter_mut().enumerate() {
-            *o = self.pose_gradient(|i| buf[i * K + f]);
+            *o = self.pose_gradient(|i| DVec2::from_array(buf[i * K + f].to_array()));
         }
         self.grad_fields = buf;
         Ok(out)
@@ -206,7 +211,7 @@ impl SoftRasterizer {
         let m = rc * r;
         self.vertex_jac.clear();
         for (y, j) in self.scaled.iter().zip(&self.jac) {
-            let mut rows = [[0.0; POSE_DIM]; 2];
+            let mut rows = [[0.0; 10]; 2];
             for k in 0..3 {
                 let mut e = DVec3::ZERO;
                 e[k] = 1.0;
@@ -216,7 +221,8 @@ impl SoftRasterizer {
                     rows[1][3 * g + k] = j[1].dot(*col);
                 }
             }
-            self.vertex_jac.push(rows);
+            self.vertex_jac
+                .push(rows.map(|r| std::array::from_fn(|c| f64x2::from([r[2 * c], r[2 * c + 1]]))));
         }
     }
 
@@ -259,12 +265,12 @@ impl SoftRasterizer {
         self.vertex_pose_jacobians();
         let vj = &self.vertex_jac;
         let w = self.silhouette.width as usize;
-        let mut rows = [[0.0f64; POSE_DIM]; TILE * TILE];
+        let mut rows = [[f64x2::ZERO; 5]; TILE * TILE];
         let mut jtj = [[0.0f64; POSE_DIM]; POSE_DIM];
         let mut jtr = [0.0f64; POSE_DIM];
         self.silhouette.run_pass::<true>(|tile| {
             for r in rows.iter_mut() {
-                *r = [0.0; POSE_DIM];
+                *r = [f64x2::ZERO; 5];
             }
             for rec in tile.records {
                 let t = tile.t[rec.px as usize];
@@ -274,8 +280,8 @@ impl SoftRasterizer {
                 let (ma, mb) = (&vj[rec.a as usize], &vj[rec.b as usize]);
                 let (ax, ay, bx, by) = (rec.ga.x * t, rec.ga.y * t, rec.gb.x * t, rec.gb.y * t);
                 let row = &mut rows[rec.px as usize];
-                for c in 0..POSE_DIM {
-                    row[c] += ax * ma[0][c] + ay * ma[1][c] + bx * mb[0][c] + by * mb[1][c];
+                for c in 0..5 {
+                    row[c] += ma[0][c] * ax + ma[1][c] * ay + mb[0][c] * bx + mb[1][c] * by;
                 }
             }
             for ly in 0..tile.h {
@@ -285,7 +291,7 @@ impl SoftRasterizer {
                     if !(SATURATION..1.0).contains(&t) {
                         continue;
                     }
-                    let jr = &rows[li];
+                    let jr: [f64; 10] = bytemuck::cast(rows[li]);
                     let rp = residual((tile.y0 + ly) * w + tile.x0 + lx, 1.0 - t);
                     for a in 0..POSE_DIM {
                         jtr[a] += jr[a] * rp;
@@ -339,18 +345,25 @@ mod bench_tmp {
             let t0 = std::time::Instant::now();
             for v in &scene.views {
                 let m = &v.mask.data;
-                r.render_with_gradients(&scene.mesh, &init, &v.camera, &s, |p| [1.0, m[p] as f64, 0.5]).unwrap();
+                r.render_with_gradients(&scene.mesh, &init, &v.camera, &s, |p| [1.0, m[p] as f64, 0.5])
+                    .unwrap();
             }
             best[1] = best[1].min(t0.elapsed().as_secs_f64());
             let t0 = std::time::Instant::now();
             let mut ne = NormalEquations::default();
             for v in &scene.views {
                 let m = &v.mask.data;
-                r.render_with_normal_equations(&scene.mesh, &init, &v.camera, &s, |p, a| a - m[p] as f64, 1.0, &mut ne).unwrap();
+                r.render_with_normal_equations(&scene.mesh, &init, &v.camera, &s, |p, a| a - m[p] as f64, 1.0, &mut ne)
+                    .unwrap();
             }
             best[2] = best[2].min(t0.elapsed().as_secs_f64());
         }
-        println!("BENCH forward {:.2} ms fused {:.2} ms gn {:.2} ms", best[0] * 1e3, best[1] * 1e3, best[2] * 1e3);
+        println!(
+            "BENCH forward {:.2} ms fused {:.2} ms gn {:.2} ms",
+            best[0] * 1e3,
+            best[1] * 1e3,
+            best[2] * 1e3
+        );
     }
 }
 
@@ -372,21 +385,28 @@ mod count_tmp {
             let m = s.cutoff_sq().sqrt();
             let (mut spans, mut chunks, mut px, mut entries) = (0, 0, 0, 0);
             let b = &sil.bins;
-            for ty in 0..b.tiles_y { for tx in 0..b.tiles_x {
-                let ti = ty * b.tiles_x + tx;
-                for &k in &b.items[b.start[ti] as usize..b.start[ti+1] as usize] {
-                    entries += 1;
-                    let tri = &sil.tris[k as usize];
-                    let (x0, y0) = ((tx * TILE) as i32, (ty * TILE) as i32);
-                    for y in tri.y0.max(y0)..=tri.y1.min(y0 + 7) {
-                        if let Some((xa, xb)) = tri.span(y as f64, m, tri.x0.max(x0), tri.x1.min(x0 + 7)) {
-                            spans += 1; px += xb - xa + 1;
-                            chunks += (xb - x0) / 4 - (xa - x0) / 4 + 1;
+            for ty in 0..b.tiles_y {
+                for tx in 0..b.tiles_x {
+                    let ti = ty * b.tiles_x + tx;
+                    for &k in &b.items[b.start[ti] as usize..b.start[ti + 1] as usize] {
+                        entries += 1;
+                        let tri = &sil.tris[k as usize];
+                        let (x0, y0) = ((tx * TILE) as i32, (ty * TILE) as i32);
+                        for y in tri.y0.max(y0)..=tri.y1.min(y0 + 7) {
+                            if let Some((xa, xb)) = tri.span(y as f64, m, tri.x0.max(x0), tri.x1.min(x0 + 7)) {
+                                spans += 1;
+                                px += xb - xa + 1;
+                                chunks += (xb - x0) / 4 - (xa - x0) / 4 + 1;
+                            }
                         }
                     }
                 }
-            }}
-            println!("COUNT {}: tris {} entries {entries} spans {spans} chunks {chunks} px {px}", v.name, sil.tris.len());
+            }
+            println!(
+                "COUNT {}: tris {} entries {entries} spans {spans} chunks {chunks} px {px}",
+                v.name,
+                sil.tris.len()
+            );
         }
     }
 }

@@ -356,6 +356,7 @@ fn chunk<const REC: bool>(
 /// Runs the tile pass: writes every pixel's final transmittance into `trans`
 /// (`width·height`, row-major) and calls `on_tile` for every tile that has
 /// triangles; with `REC`, each tile's contributing pairs come with it.
+#[inline(always)]
 pub(crate) fn run<const REC: bool>(
     pass: &Pass,
     trans: &mut [f64],

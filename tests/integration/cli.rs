@@ -26,7 +26,11 @@ fn stderr(o: &Output) -> String {
 
 /// Fails with one line on stderr containing every `needle`.
 fn assert_error(o: &Output, needles: &[&str]) {
-    assert!(!o.status.success(), "expected failure, got success; stderr: {}", stderr(o));
+    assert!(
+        !o.status.success(),
+        "expected failure, got success; stderr: {}",
+        stderr(o)
+    );
     let e = stderr(o);
     assert_eq!(e.trim_end().lines().count(), 1, "one line expected: {e}");
     for n in needles {
@@ -54,7 +58,15 @@ fn info_prints_the_duck_counts_and_bounds() {
 
 fn synth(dir: &Path, mesh: &str, views: &str, extra: &[&str]) {
     let mesh = fixture(mesh);
-    let mut args = vec!["synth", "--mesh", mesh.to_str().unwrap(), "--views", views, "--seed", "3"];
+    let mut args = vec![
+        "synth",
+        "--mesh",
+        mesh.to_str().unwrap(),
+        "--views",
+        views,
+        "--seed",
+        "3",
+    ];
     args.extend_from_slice(extra);
     args.extend_from_slice(&["--out", dir.to_str().unwrap()]);
     let o = run(&args);
@@ -65,26 +77,57 @@ fn synth(dir: &Path, mesh: &str, views: &str, extra: &[&str]) {
 fn synth_render_fit_and_loss_work_together() {
     let d = tmp("pipeline");
     // A .gltf with an external .bin: the copy must bring the buffer along.
-    synth(&d, "gltf/Box/glTF/Box.gltf", "3", &["--width", "96", "--height", "80", "--images"]);
-    for f in ["scene.json", "Box.gltf", "Box0.bin", "masks/view0.png", "masks/view2.png", "images/view1.png"] {
+    synth(
+        &d,
+        "gltf/Box/glTF/Box.gltf",
+        "3",
+        &["--width", "96", "--height", "80", "--images"],
+    );
+    for f in [
+        "scene.json",
+        "Box.gltf",
+        "Box0.bin",
+        "masks/view0.png",
+        "masks/view2.png",
+        "images/view1.png",
+    ] {
         assert!(d.join(f).is_file(), "{f} missing");
     }
-    let scene: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("scene.json")).unwrap()).unwrap();
+    let scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("scene.json")).unwrap()).unwrap();
     assert_eq!(scene["views"].as_array().unwrap().len(), 3);
     assert_eq!(scene["views"][0]["camera"]["width"], 96);
     let gt = scene["ground_truth_pose"].to_string();
     std::fs::write(d.join("gt.json"), &gt).unwrap();
 
     // Overlays at the true pose: IoU 1 in every view.
-    let o = run(&["render", d.join("scene.json").to_str().unwrap(), "--pose", d.join("gt.json").to_str().unwrap(), "--out", d.join("ov").to_str().unwrap()]);
+    let o = run(&[
+        "render",
+        d.join("scene.json").to_str().unwrap(),
+        "--pose",
+        d.join("gt.json").to_str().unwrap(),
+        "--out",
+        d.join("ov").to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(String::from_utf8_lossy(&o.stdout).contains("view0: IoU 1.0000"), "{}", String::from_utf8_lossy(&o.stdout));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("view0: IoU 1.0000"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
     let png = image::open(d.join("ov/view2.png")).unwrap();
     assert_eq!((png.width(), png.height()), (96, 80));
 
     // The loss is lower at the truth than off it.
     let loss_at = |pose: &Path| -> serde_json::Value {
-        let o = run(&["loss", d.join("scene.json").to_str().unwrap(), "--pose", pose.to_str().unwrap(), "--sigma", "0.5"]);
+        let o = run(&[
+            "loss",
+            d.join("scene.json").to_str().unwrap(),
+            "--pose",
+            pose.to_str().unwrap(),
+            "--sigma",
+            "0.5",
+        ]);
         assert!(o.status.success(), "{}", stderr(&o));
         serde_json::from_slice(&o.stdout).unwrap()
     };
@@ -99,7 +142,14 @@ fn synth_render_fit_and_loss_work_together() {
     assert!(away["gradient"][3].as_f64().unwrap() > 0.0, "{}", away["gradient"]);
 
     // Fit from nothing; the result file has the SPEC §3 fields.
-    let o = run(&["fit", d.join("scene.json").to_str().unwrap(), "--out", d.join("result.json").to_str().unwrap(), "--overlays", d.join("fit").to_str().unwrap()]);
+    let o = run(&[
+        "fit",
+        d.join("scene.json").to_str().unwrap(),
+        "--out",
+        d.join("result.json").to_str().unwrap(),
+        "--overlays",
+        d.join("fit").to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("result.json")).unwrap()).unwrap();
     for k in ["pose", "matrix", "views", "loss_history", "seconds", "errors"] {
@@ -113,24 +163,48 @@ fn synth_render_fit_and_loss_work_together() {
     assert!(r["errors"]["add_s_rel"].as_f64().unwrap() < 0.05, "{}", r["errors"]);
     assert!(d.join("fit/view0.png").is_file());
     // A result file serves as a pose file.
-    let o = run(&["render", d.join("scene.json").to_str().unwrap(), "--pose", d.join("result.json").to_str().unwrap(), "--out", d.join("ov2").to_str().unwrap()]);
+    let o = run(&[
+        "render",
+        d.join("scene.json").to_str().unwrap(),
+        "--pose",
+        d.join("result.json").to_str().unwrap(),
+        "--out",
+        d.join("ov2").to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
 #[test]
 fn one_view_fits_with_a_warning() {
     let d = tmp("oneview");
-    synth(&d, "gltf/Box/glTF-Binary/Box.glb", "1", &["--width", "64", "--height", "64"]);
-    let o = run(&["fit", d.join("scene.json").to_str().unwrap(), "--out", d.join("r.json").to_str().unwrap()]);
+    synth(
+        &d,
+        "gltf/Box/glTF-Binary/Box.glb",
+        "1",
+        &["--width", "64", "--height", "64"],
+    );
+    let o = run(&[
+        "fit",
+        d.join("scene.json").to_str().unwrap(),
+        "--out",
+        d.join("r.json").to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("warning: ") && stderr(&o).contains("one view"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("warning: ") && stderr(&o).contains("one view"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
 fn bad_inputs_give_one_clear_line() {
     let d = tmp("bad");
     // Missing file.
-    assert_error(&run(&["info", d.join("nope.glb").to_str().unwrap()]), &["nope.glb", "cannot read"]);
+    assert_error(
+        &run(&["info", d.join("nope.glb").to_str().unwrap()]),
+        &["nope.glb", "cannot read"],
+    );
     // Truncated GLB.
     let duck = std::fs::read(fixture("gltf/Duck/glTF-Binary/Duck.glb")).unwrap();
     std::fs::write(d.join("cut.glb"), &duck[..5000]).unwrap();
@@ -139,7 +213,12 @@ fn bad_inputs_give_one_clear_line() {
     let draco = fixture("gltf/2CylinderEngine/glTF-Draco-assimp/2CylinderEngine.gltf");
     assert_error(&run(&["info", draco.to_str().unwrap()]), &["Draco"]);
 
-    synth(&d, "gltf/Box/glTF-Binary/Box.glb", "2", &["--width", "64", "--height", "48"]);
+    synth(
+        &d,
+        "gltf/Box/glTF-Binary/Box.glb",
+        "2",
+        &["--width", "64", "--height", "48"],
+    );
     let scene_path = d.join("scene.json");
     let text = std::fs::read_to_string(&scene_path).unwrap();
     let fit = |name: &str, scene: &str| {
@@ -148,7 +227,10 @@ fn bad_inputs_give_one_clear_line() {
         run(&["fit", p.to_str().unwrap(), "--out", d.join("r.json").to_str().unwrap()])
     };
     // NaN in the JSON.
-    assert_error(&fit("nan.json", &text.replacen("\"fx\": ", "\"fx\": NaN, \"x\": ", 1)), &["nan.json"]);
+    assert_error(
+        &fit("nan.json", &text.replacen("\"fx\": ", "\"fx\": NaN, \"x\": ", 1)),
+        &["nan.json"],
+    );
     // A non-finite focal length reaches the camera check.
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["views"][1]["camera"]["fx"] = (-5.0).into();
@@ -160,7 +242,10 @@ fn bad_inputs_give_one_clear_line() {
     // A mask of the wrong size.
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["views"][0]["camera"]["width"] = 65.into();
-    assert_error(&fit("size.json", &v.to_string()), &["view0", "masks/view0.png", "64×48", "65×48"]);
+    assert_error(
+        &fit("size.json", &v.to_string()),
+        &["view0", "masks/view0.png", "64×48", "65×48"],
+    );
     // An empty mask.
     let black = localisebot::io::png::encode_gray(64, 48, &vec![0u8; 64 * 48]);
     std::fs::write(d.join("masks/empty.png"), black).unwrap();
@@ -187,9 +272,209 @@ fn bad_inputs_give_one_clear_line() {
     gt["scale"] = serde_json::json!([0.1, 0.1, 0.1]);
     std::fs::write(d.join("behind.json"), gt.to_string()).unwrap();
     assert_error(
-        &run(&["render", scene_path.to_str().unwrap(), "--pose", d.join("behind.json").to_str().unwrap(), "--out", d.join("o").to_str().unwrap()]),
+        &run(&[
+            "render",
+            scene_path.to_str().unwrap(),
+            "--pose",
+            d.join("behind.json").to_str().unwrap(),
+            "--out",
+            d.join("o").to_str().unwrap(),
+        ]),
         &["view0", "behind the camera"],
     );
     // Bad search settings.
-    assert_error(&run(&["fit", scene_path.to_str().unwrap(), "--out", "x.json", "--search", "grid:3"]), &["--search"]);
+    assert_error(
+        &run(&[
+            "fit",
+            scene_path.to_str().unwrap(),
+            "--out",
+            "x.json",
+            "--search",
+            "grid:3",
+        ]),
+        &["--search"],
+    );
+}
+
+#[test]
+fn eval_report_agrees_with_its_scenes() {
+    let d = tmp("eval");
+    for (i, (mesh, views)) in [
+        ("gltf/Box/glTF-Binary/Box.glb", "2"),
+        ("gltf/Avocado-kaolin/avocado.gltf", "3"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let dir = d.join(format!("scenes/s{i}"));
+        synth(&dir, mesh, views, &["--width", "64", "--height", "64", "--grasps", "3"]);
+    }
+    let out = d.join("report");
+    let o = run(&[
+        "eval",
+        d.join("scenes").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--jobs",
+        "2",
+        "--search",
+        "uniform:128",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(
+        table.contains("precision") && table.contains("ADD(-S) < 10%"),
+        "{table}"
+    );
+    for f in ["report.md", "report.json", "loss_vs_views.svg", "errors.svg"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let scenes = r["scenes"].as_array().unwrap();
+    assert_eq!(scenes.len(), 2);
+    // The P/R/F1 counts are the scenes' views and IoUs.
+    let views: usize = scenes
+        .iter()
+        .map(|s| s["result"]["views"].as_array().unwrap().len())
+        .sum();
+    assert_eq!(views, 5);
+    for row in r["summary"]["prf"].as_array().unwrap() {
+        let t = row["threshold"].as_f64().unwrap();
+        let tp = scenes
+            .iter()
+            .flat_map(|s| s["result"]["views"].as_array().unwrap().iter())
+            .filter(|v| v["iou"].as_f64().unwrap() > t)
+            .count();
+        assert_eq!(row["tp"].as_u64().unwrap() as usize, tp);
+        assert_eq!(row["ground_truths"].as_u64().unwrap() as usize, views);
+    }
+    // ADD(-S) accuracy is the fraction of scenes below 10 %; the box is symmetric.
+    assert_eq!(scenes[0]["symmetric"], true);
+    assert_eq!(scenes[1]["symmetric"], false);
+    let acc = scenes
+        .iter()
+        .filter(|s| {
+            let e = &s["result"]["errors"];
+            let m = if s["symmetric"] == true {
+                &e["add_s_rel"]
+            } else {
+                &e["add_rel"]
+            };
+            m.as_f64().unwrap() < 0.1
+        })
+        .count() as f64
+        / 2.0;
+    assert_eq!(r["summary"]["add_accuracy"].as_f64().unwrap(), acc);
+    // One re-fit per number of views; grasps checked in every view.
+    assert_eq!(scenes[1]["loss_by_views"].as_array().unwrap().len(), 3);
+    assert!(scenes[1]["grasps_total"].as_u64().unwrap() > 0);
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("| IoU > |") && md.contains("Grasp accuracy") && md.contains("loss_vs_views.svg"));
+    assert!(std::fs::read_to_string(out.join("loss_vs_views.svg"))
+        .unwrap()
+        .starts_with("<svg"));
+}
+
+#[test]
+fn render_exports_grasp_rectangles() {
+    let d = tmp("grasps");
+    synth(
+        &d,
+        "gltf/Box/glTF-Binary/Box.glb",
+        "2",
+        &["--width", "80", "--height", "80", "--grasps", "4"],
+    );
+    let scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("scene.json")).unwrap()).unwrap();
+    assert_eq!(scene["grasps"].as_array().unwrap().len(), 4);
+    std::fs::write(d.join("gt.json"), scene["ground_truth_pose"].to_string()).unwrap();
+    let o = run(&[
+        "render",
+        d.join("scene.json").to_str().unwrap(),
+        "--pose",
+        d.join("gt.json").to_str().unwrap(),
+        "--out",
+        d.join("ov").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let txt = std::fs::read_to_string(d.join("ov/view0.grasps.txt")).unwrap();
+    let rects = localisebot::grasp::rectangles_from_txt(&txt).unwrap();
+    assert!(!rects.is_empty() && rects.len() <= 4);
+    // A malformed grasp in the scene is named.
+    let mut bad = scene.clone();
+    bad["grasps"][1]["width"] = (-1.0).into();
+    std::fs::write(d.join("bad.json"), bad.to_string()).unwrap();
+    assert_error(
+        &run(&[
+            "render",
+            d.join("bad.json").to_str().unwrap(),
+            "--pose",
+            d.join("gt.json").to_str().unwrap(),
+            "--out",
+            d.join("o").to_str().unwrap(),
+        ]),
+        &["grasps[1]", "width"],
+    );
+}
+
+#[test]
+fn importers_write_loadable_scenes() {
+    let d = tmp("import");
+    let o = run(&[
+        "import",
+        "nerf",
+        fixture("nerf_lego").to_str().unwrap(),
+        "--mesh",
+        fixture("gltf/Box/glTF/Box.gltf").to_str().unwrap(),
+        "--out",
+        d.join("lego").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning: ") && stderr(&o).contains("skipped"));
+    let text = std::fs::read_to_string(d.join("lego/scene.json")).unwrap();
+    let scene = localisebot::load_scene(&d.join("lego/scene.json").to_string_lossy(), &text, &|p| {
+        std::fs::read(p).ok()
+    })
+    .unwrap();
+    assert_eq!(scene.views.len(), 6);
+    for v in &scene.views {
+        assert!((v.camera.centre().length() - 4.031).abs() < 1e-3);
+    }
+    let o = run(&[
+        "import",
+        "bop",
+        fixture("bop_mini").to_str().unwrap(),
+        "--scene",
+        "1",
+        "--object",
+        "1",
+        "--images",
+        "1,4,9",
+        "--out",
+        d.join("bop").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(d.join("bop/scene.json")).unwrap();
+    let scene = localisebot::load_scene(&d.join("bop/scene.json").to_string_lossy(), &text, &|p| {
+        std::fs::read(p).ok()
+    })
+    .unwrap();
+    assert_eq!(scene.views.len(), 3);
+    assert!(scene.ground_truth_pose.is_some());
+    // A missing object is a clear error.
+    assert_error(
+        &run(&[
+            "import",
+            "bop",
+            fixture("bop_mini").to_str().unwrap(),
+            "--scene",
+            "1",
+            "--object",
+            "77",
+            "--out",
+            d.join("x").to_str().unwrap(),
+        ]),
+        &["77"],
+    );
 }

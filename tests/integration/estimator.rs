@@ -18,15 +18,30 @@ fn views(cameras: &[Camera], masks: &[localisebot::Mask]) -> Vec<View> {
         .iter()
         .zip(masks)
         .enumerate()
-        .map(|(i, (c, m))| View { name: format!("view{i}"), camera: *c, mask: m.clone(), image: None })
+        .map(|(i, (c, m))| View {
+            name: format!("view{i}"),
+            camera: *c,
+            mask: m.clone(),
+            image: None,
+        })
         .collect()
 }
 
 #[test]
 fn duck_is_found_from_no_initial_pose() {
     let m = mesh("gltf/Duck/glTF-Binary/Duck.glb");
-    let s = synthesize(&m, &SynthSettings { views: 4, width: 160, height: 120, seed: 21, ..Default::default() }, None)
-        .unwrap();
+    let s = synthesize(
+        &m,
+        &SynthSettings {
+            views: 4,
+            width: 160,
+            height: 120,
+            seed: 21,
+            ..Default::default()
+        },
+        None,
+    )
+    .unwrap();
     let mut est = Estimator::new(m.clone(), views(&s.cameras, &s.masks), None, FitSettings::default()).unwrap();
     let first = est.step();
     assert_eq!(first.phase, Phase::Search);
@@ -34,7 +49,12 @@ fn duck_is_found_from_no_initial_pose() {
     assert_eq!(last.phase, Phase::Done);
     assert!(last.termination.is_some());
     let e = pose_errors(&m, &est.pose(), &s.pose);
-    println!("duck: rotation {:.2}°, ADD {:.2}% of diameter, scale {:.2}%", e.rotation_deg, 100.0 * e.add_rel, 100.0 * e.scale);
+    println!(
+        "duck: rotation {:.2}°, ADD {:.2}% of diameter, scale {:.2}%",
+        e.rotation_deg,
+        100.0 * e.add_rel,
+        100.0 * e.scale
+    );
     assert!(e.rotation_deg < 3.0, "{e:?}");
     assert!(e.add_rel < 0.02, "{e:?}");
     assert!(e.scale < 0.03, "{e:?}");
@@ -56,15 +76,27 @@ fn a_given_initial_pose_skips_the_search_and_is_refined() {
     // The PyTorch3D reference case: its init pose is 22° from the truth.
     let dir = fixture("pytorch3d-case1/scene128");
     let text = std::fs::read_to_string(dir.join("scene.json")).unwrap();
-    let scene = load_scene(&dir.join("scene.json").to_string_lossy(), &text, &|p| std::fs::read(p).ok()).unwrap();
+    let scene = load_scene(&dir.join("scene.json").to_string_lossy(), &text, &|p| {
+        std::fs::read(p).ok()
+    })
+    .unwrap();
     let init = Pose::from_json_str(&std::fs::read_to_string(dir.join("init_pose.json")).unwrap(), "init").unwrap();
     let gt = scene.ground_truth_pose.unwrap();
     let before = pose_errors(&scene.mesh, &init, &gt);
-    let mut est = Estimator::new(scene.mesh.clone(), scene.views.clone(), Some(init), FitSettings::default()).unwrap();
+    let mut est = Estimator::new(
+        scene.mesh.clone(),
+        scene.views.clone(),
+        Some(init),
+        FitSettings::default(),
+    )
+    .unwrap();
     assert_eq!(est.step().phase, Phase::Refine, "no search with an initial pose");
     est.run(100_000);
     let after = pose_errors(&scene.mesh, &est.pose(), &gt);
-    println!("reference case: rotation {:.2}° -> {:.2}°, ADD {:.3} -> {:.3}", before.rotation_deg, after.rotation_deg, before.add_rel, after.add_rel);
+    println!(
+        "reference case: rotation {:.2}° -> {:.2}°, ADD {:.3} -> {:.3}",
+        before.rotation_deg, after.rotation_deg, before.add_rel, after.add_rel
+    );
     assert!(after.rotation_deg < 2.0 && after.add_rel < 0.01, "{after:?}");
     assert!(after.rotation_deg < before.rotation_deg / 5.0);
 }
@@ -72,7 +104,18 @@ fn a_given_initial_pose_skips_the_search_and_is_refined() {
 #[test]
 fn one_view_is_allowed() {
     let m = localisebot::synth::blob_mesh(12, 25);
-    let s = synthesize(&m, &SynthSettings { views: 1, width: 96, height: 96, seed: 2, ..Default::default() }, None).unwrap();
+    let s = synthesize(
+        &m,
+        &SynthSettings {
+            views: 1,
+            width: 96,
+            height: 96,
+            seed: 2,
+            ..Default::default()
+        },
+        None,
+    )
+    .unwrap();
     let mut est = Estimator::new(m, views(&s.cameras, &s.masks), None, FitSettings::default()).unwrap();
     est.run(100_000);
     // One view cannot fix depth against scale, but the silhouette must match.
@@ -83,24 +126,54 @@ fn one_view_is_allowed() {
 #[test]
 fn an_object_behind_a_camera_is_named() {
     let m = mesh("gltf/Box/glTF-Binary/Box.glb");
-    let s = synthesize(&m, &SynthSettings { views: 3, width: 64, height: 64, seed: 5, ..Default::default() }, None).unwrap();
+    let s = synthesize(
+        &m,
+        &SynthSettings {
+            views: 3,
+            width: 64,
+            height: 64,
+            seed: 5,
+            ..Default::default()
+        },
+        None,
+    )
+    .unwrap();
     let mut v = views(&s.cameras, &s.masks);
     // Turn view1's camera around: it now looks away from the object.
     let c = v[1].camera;
     v[1].camera.rotation = glam::DMat3::from_diagonal(glam::DVec3::new(-1.0, 1.0, -1.0)) * c.rotation;
     v[1].camera.translation = glam::DMat3::from_diagonal(glam::DVec3::new(-1.0, 1.0, -1.0)) * c.translation;
-    let e = Estimator::new(m.clone(), v.clone(), None, FitSettings::default()).err().expect("must fail");
-    assert!(e.to_string().contains("view1") && e.to_string().contains("behind"), "{e}");
-    let e = Estimator::new(m, v, Some(s.pose), FitSettings::default()).err().expect("must fail");
+    let e = Estimator::new(m.clone(), v.clone(), None, FitSettings::default())
+        .err()
+        .expect("must fail");
+    assert!(
+        e.to_string().contains("view1") && e.to_string().contains("behind"),
+        "{e}"
+    );
+    let e = Estimator::new(m, v, Some(s.pose), FitSettings::default())
+        .err()
+        .expect("must fail");
     assert!(e.to_string().contains("view1"), "{e}");
 }
 
 #[test]
 fn bad_settings_are_refused() {
     let m = localisebot::synth::blob_mesh(12, 25);
-    let s = synthesize(&m, &SynthSettings { views: 2, width: 64, height: 64, ..Default::default() }, None).unwrap();
+    let s = synthesize(
+        &m,
+        &SynthSettings {
+            views: 2,
+            width: 64,
+            height: 64,
+            ..Default::default()
+        },
+        None,
+    )
+    .unwrap();
     let mut settings = FitSettings::default();
     settings.stages[0].sigma = f64::NAN;
-    let e = Estimator::new(m, views(&s.cameras, &s.masks), None, settings).err().unwrap();
+    let e = Estimator::new(m, views(&s.cameras, &s.masks), None, settings)
+        .err()
+        .unwrap();
     assert!(e.to_string().contains("sigma"), "{e}");
 }
