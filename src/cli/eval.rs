@@ -6,7 +6,7 @@ use super::files::{load_scene_file, to_json, write, CliResult};
 use super::fit::FitOptions;
 use indicatif::{ProgressBar, ProgressStyle};
 use localisebot::estimator::{Estimator, FitSettings};
-use localisebot::eval::{accuracy_measure, is_symmetric, report_markdown, summarise, SceneOutcome, Summary};
+use localisebot::eval::{accuracy_measure, closest_equivalent, report_markdown, summarise, symmetries, SceneOutcome, Summary};
 use localisebot::{grasp, Pose, Scene};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -134,12 +134,17 @@ fn evaluate_scene(path: &Path, settings: &FitSettings, curve: bool) -> CliResult
     let Some(gt) = scene.ground_truth_pose else {
         return Ok(None);
     };
-    let symmetric = is_symmetric(&scene.mesh);
+    let syms = symmetries(&scene.mesh);
+    let symmetric = syms.len() > 1;
+    // A symmetric object's pose is known up to its symmetries: measure against the
+    // equivalent of the truth closest to the estimate.
+    let truth = |p: &Pose| if symmetric { closest_equivalent(&scene.mesh, &syms, p, &gt) } else { gt };
     let n = scene.views.len();
     let (est, secs) = fit(&scene, n, settings).map_err(|e| format!("{}: {e}", path.display()))?;
-    let result = est.result(secs, Some(&gt));
+    let gt_eq = truth(&est.pose());
+    let result = est.result(secs, Some(&gt_eq));
     let predicted_area = est.view_figures(&est.pose()).iter().map(|f| f.2.area()).collect();
-    let (grasps_correct, grasps_total) = grasp_accuracy(&scene, &est.pose(), &gt);
+    let (grasps_correct, grasps_total) = grasp_accuracy(&scene, &est.pose(), &gt_eq);
     let mut loss_by_views = Vec::new();
     let mut add_rel_by_views = Vec::new();
     if curve {
@@ -153,7 +158,7 @@ fn evaluate_scene(path: &Path, settings: &FitSettings, curve: bool) -> CliResult
                 Some((est_k, s)) => (est_k, *s),
                 None => (&est, s),
             };
-            let r = est_k.result(secs_k, Some(&gt));
+            let r = est_k.result(secs_k, Some(&truth(&est_k.pose())));
             loss_by_views.push(r.loss_history.last().copied().unwrap_or(f64::NAN));
             let tmp = SceneOutcome {
                 name: String::new(),

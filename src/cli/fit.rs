@@ -21,10 +21,10 @@ pub struct FitOptions {
     /// How many of the best search candidates to refine.
     #[arg(long, default_value_t = 4)]
     pub keep: usize,
-    /// Weight λ1 of the IoU loss.
+    /// Weight λ1 of the IoU loss (stages using Adam; LM stages fit the pixel residuals).
     #[arg(long, default_value_t = 1.0)]
     pub lambda_iou: f64,
-    /// Weight λ2 of the contour (Hausdorff) loss.
+    /// Weight λ2 of the contour (Hausdorff) loss (stages using Adam).
     #[arg(long)]
     pub lambda_contour: Option<f64>,
     /// Optimiser of the refinement stages: adam, or lm (Levenberg–Marquardt).
@@ -144,7 +144,13 @@ pub fn run(a: &FitArgs) -> CliResult {
     }
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    let result = est.result(seconds, scene.ground_truth_pose.as_ref());
+    // A symmetric object's pose is known up to its symmetries: errors are measured
+    // against the equivalent of the truth closest to the estimate.
+    let truth = scene.ground_truth_pose.map(|gt| {
+        let syms = localisebot::eval::symmetries(&scene.mesh);
+        localisebot::eval::closest_equivalent(&scene.mesh, &syms, &est.pose(), &gt)
+    });
+    let result = est.result(seconds, truth.as_ref());
     write(&a.out, to_json(&result).as_bytes())?;
     if let Some(dir) = &a.overlays {
         let pose = est.pose();

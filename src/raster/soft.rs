@@ -16,10 +16,14 @@
 //! would be meaningless); there is no back-face culling; a pixel stops accumulating
 //! once its transmittance `T = Π(1 − D_j)` falls below [`SATURATION`].
 //!
-//! Speed: every triangle visits only the pixels of its bounding box expanded by the
-//! σ-margin `m = √(σ·ln(1/ε − 1))`, and within each row only the span where all three
-//! edge functions are ≥ −m (pixels farther than m from a half-plane are farther than
-//! m from the triangle). Inside pixels cost three fused multiply-adds and one `exp`.
+//! Speed (`tiles.rs`): triangles are binned into 16×16-pixel tiles by their boxes
+//! expanded by the cut-off distance `m = √(σ·ln(1/ε − 1))`; within a tile each
+//! triangle visits, row by row, only the span where all three edge functions are
+//! ≥ −m, a few pixels at a time in SIMD lanes (f64, `wide`). Everything is f64: the
+//! results match a naive f64 oracle to 1e-9 and the gradients match central
+//! differences to ~1e-9 relative. Note that with a fine mesh and a small σ interior
+//! pixels rarely saturate (SoftRas's internal edges keep `T` around 1e-3..1e-1), so
+//! nearly every pair in the σ-band of every triangle is evaluated.
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};

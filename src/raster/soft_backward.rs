@@ -312,101 +312,13 @@ impl SoftRasterizer {
                 r * r
             })
             .sum();
-        for a in 0..POSE_DIM {
+        for (a, row) in out.jtj.iter_mut().enumerate() {
             out.jtr[a] += weight * jtr[a];
-            for b in 0..POSE_DIM {
-                out.jtj[a][b] += weight * if b >= a { jtj[a][b] } else { jtj[b][a] };
+            for (b, v) in row.iter_mut().enumerate() {
+                // Only the upper triangle was accumulated.
+                *v += weight * if b >= a { jtj[a][b] } else { jtj[b][a] };
             }
         }
         out.cost += 0.5 * weight * cost;
-    }
-}
-
-#[cfg(test)]
-mod bench_tmp {
-    use super::*;
-    #[test]
-    fn bench_tmp() {
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/pytorch3d-case1/scene128/");
-        let text = std::fs::read_to_string(format!("{dir}scene.json")).unwrap();
-        let res = |rel: &str| std::fs::read(format!("{dir}{rel}")).ok();
-        let scene = crate::load_scene("scene.json", &text, &res).unwrap();
-        let init = Pose::from_json_str(&std::fs::read_to_string(format!("{dir}init_pose.json")).unwrap(), "x").unwrap();
-        let s = SoftSettings::from_ndc(1e-4, 128, 128);
-        let mut r = SoftRasterizer::new();
-        let n: usize = std::env::var("BENCH_N").ok().and_then(|v| v.parse().ok()).unwrap_or(20);
-        let mut best = [f64::MAX; 3];
-        for _ in 0..n {
-            let t0 = std::time::Instant::now();
-            for v in &scene.views {
-                r.render(&scene.mesh, &init, &v.camera, &s).unwrap();
-            }
-            best[0] = best[0].min(t0.elapsed().as_secs_f64());
-            let t0 = std::time::Instant::now();
-            for v in &scene.views {
-                let m = &v.mask.data;
-                r.render_with_gradients(&scene.mesh, &init, &v.camera, &s, |p| [1.0, m[p] as f64, 0.5])
-                    .unwrap();
-            }
-            best[1] = best[1].min(t0.elapsed().as_secs_f64());
-            let t0 = std::time::Instant::now();
-            let mut ne = NormalEquations::default();
-            for v in &scene.views {
-                let m = &v.mask.data;
-                r.render_with_normal_equations(&scene.mesh, &init, &v.camera, &s, |p, a| a - m[p] as f64, 1.0, &mut ne)
-                    .unwrap();
-            }
-            best[2] = best[2].min(t0.elapsed().as_secs_f64());
-        }
-        println!(
-            "BENCH forward {:.2} ms fused {:.2} ms gn {:.2} ms",
-            best[0] * 1e3,
-            best[1] * 1e3,
-            best[2] * 1e3
-        );
-    }
-}
-
-#[cfg(test)]
-mod count_tmp {
-    use super::*;
-    #[test]
-    fn count_tmp() {
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/pytorch3d-case1/scene128/");
-        let text = std::fs::read_to_string(format!("{dir}scene.json")).unwrap();
-        let res = |rel: &str| std::fs::read(format!("{dir}{rel}")).ok();
-        let scene = crate::load_scene("scene.json", &text, &res).unwrap();
-        let init = Pose::from_json_str(&std::fs::read_to_string(format!("{dir}init_pose.json")).unwrap(), "x").unwrap();
-        let s = SoftSettings::from_ndc(1e-4, 128, 128);
-        let mut r = SoftRasterizer::new();
-        for v in &scene.views {
-            r.render(&scene.mesh, &init, &v.camera, &s).unwrap();
-            let sil = &r.silhouette;
-            let m = s.cutoff_sq().sqrt();
-            let (mut spans, mut chunks, mut px, mut entries) = (0, 0, 0, 0);
-            let b = &sil.bins;
-            for ty in 0..b.tiles_y {
-                for tx in 0..b.tiles_x {
-                    let ti = ty * b.tiles_x + tx;
-                    for &k in &b.items[b.start[ti] as usize..b.start[ti + 1] as usize] {
-                        entries += 1;
-                        let tri = &sil.tris[k as usize];
-                        let (x0, y0) = ((tx * TILE) as i32, (ty * TILE) as i32);
-                        for y in tri.y0.max(y0)..=tri.y1.min(y0 + 7) {
-                            if let Some((xa, xb)) = tri.span(y as f64, m, tri.x0.max(x0), tri.x1.min(x0 + 7)) {
-                                spans += 1;
-                                px += xb - xa + 1;
-                                chunks += (xb - x0) / 4 - (xa - x0) / 4 + 1;
-                            }
-                        }
-                    }
-                }
-            }
-            println!(
-                "COUNT {}: tris {} entries {entries} spans {spans} chunks {chunks} px {px}",
-                v.name,
-                sil.tris.len()
-            );
-        }
     }
 }

@@ -1,11 +1,11 @@
-//! The soft rasteriser's kernel: triangle setup, binning into 8×8-pixel tiles, and
+//! The soft rasteriser's kernel: triangle setup, binning into `TILE`² pixel tiles, and
 //! the tile pass shared by the forward pass, the backward pass and the
 //! Gauss–Newton accumulation.
 //!
 //! Each triangle is binned into the tiles its σ-expanded bounding box touches. A tile
 //! is processed on its own, triangle by triangle: for every row of the triangle's box
 //! inside the tile, only the span where all three edge functions are ≥ −m (m the
-//! cut-off distance) is visited. Every contributing (pixel, triangle) pair multiplies
+//! cut-off distance) is visited, `LANES` pixels at a time. Every contributing (pixel, triangle) pair multiplies
 //! the pixel's transmittance `T` by `1 − D` and, when asked, leaves a [`Record`] of its
 //! `∂A/∂(2-D vertex)` divided by T. Once the tile is done its T are final, and the
 //! caller's tile callback turns the records into gradients while they are in cache —
@@ -15,11 +15,19 @@ use crate::raster::soft::SATURATION;
 use glam::DVec2;
 use wide::{CmpGe, CmpGt, CmpLe, CmpLt};
 
-/// The lane types of the kernel.
+/// The lane types of the kernel: two f64 lanes (SSE2, wasm simd128, or scalar),
+/// four where the build enables AVX (e.g. `-C target-cpu=native`).
+#[cfg(not(target_feature = "avx"))]
 type F = wide::f64x2;
+#[cfg(not(target_feature = "avx"))]
 type U = wide::u64x2;
+#[cfg(target_feature = "avx")]
+type F = wide::f64x4;
+#[cfg(target_feature = "avx")]
+type U = wide::u64x4;
 
-/// Tile side in pixels.
+/// Tile side in pixels (16 measured ~6 % faster than 8 on the reference blob: fewer
+/// triangles are split between tiles).
 pub(crate) const TILE: usize = 16;
 
 /// One triangle ready for rasterisation: vertices, normalised edge functions
@@ -28,6 +36,8 @@ pub(crate) const TILE: usize = 16;
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct TriSetup {
     pub idx: [u32; 3],
+    /// `idx` rotated: the end vertex of each edge.
+    pub next: [u32; 3],
     /// Unit inward edge normals and offsets: `e_k(p) = n_k·p + c_k`.
     pub n: [DVec2; 3],
     pub c: [f64; 3],
@@ -73,6 +83,7 @@ impl TriSetup {
         let s = cr.signum();
         let mut t = TriSetup {
             idx,
+            next: [idx[1], idx[2], idx[0]],
             n: [DVec2::ZERO; 3],
             c: [0.0; 3],
             sd: [DVec2::ZERO; 3],
@@ -105,7 +116,7 @@ impl TriSetup {
     /// Inclusive x range of row `y`, within `[lo0, hi0]` (non-negative integers), where
     /// every edge function is ≥ −m; `None` when empty.
     #[inline(always)]
-    pub(crate) fn span(&self, y: f64, m: f64, lo0: i32, hi0: i32) -> Option<(i32, i32)> {
+    fn span(&self, y: f64, m: f64, lo0: i32, hi0: i32) -> Option<(i32, i32)> {
         let mut lo = f64::NEG_INFINITY;
         let mut hi = f64::INFINITY;
         for k in 0..3 {
@@ -121,7 +132,8 @@ impl TriSetup {
         }
         let lo = (lo - 1e-7).max(lo0 as f64);
         let hi = (hi + 1e-7).min(hi0 as f64);
-        if !(lo <= hi) {
+        // Both are finite here (`max`/`min` with the finite bounds drop a NaN).
+        if lo > hi {
             return None;
         }
         // Both are ≥ 0 here, so truncation is floor.
@@ -214,7 +226,7 @@ pub(crate) struct Pass<'a> {
 }
 
 /// Lanes processed together (a row chunk of the tile; `TILE` is a multiple).
-const LANES: usize = 2;
+const LANES: usize = std::mem::size_of::<F>() / 8;
 
 /// `e^{−z}` per lane for z ≥ 0, to within a few ulps: range reduction by ln 2 and a
 /// degree-11 Taylor polynomial on |r| ≤ ln2/2 (truncation error < 1e-14), branch-free.
@@ -222,8 +234,9 @@ const LANES: usize = 2;
 #[inline(always)]
 fn exp_neg_lanes(z: F) -> F {
     const LOG2E: f64 = std::f64::consts::LOG2_E;
-    const LN2_HI: f64 = 6.931_471_803_691_238_164_9e-1;
-    const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+    // fdlibm's split of ln 2: LN2_HI has trailing zero bits, so k·LN2_HI is exact.
+    const LN2_HI: f64 = f64::from_bits(0x3FE6_2E42_FEE0_0000);
+    const LN2_LO: f64 = f64::from_bits(0x3DEA_39EF_3579_3C76);
     // Round to nearest by the 1.5·2^52 trick: the low bits of `kk` then hold k.
     const MAGIC: f64 = 6_755_399_441_055_744.0;
     const C: [f64; 12] = [
@@ -336,17 +349,19 @@ fn chunk<const REC: bool>(
         if mask & (1 << l) == 0 {
             continue;
         }
-        let k = best_k[l] as usize;
-        let p = DVec2::new(xbase + l as f64, rc.y);
-        let e = tri.n[k].dot(p) + tri.c[k];
-        let s = tri.sd[k].dot(p) + tri.sc[k];
+        let k = (best_k[l] as usize).min(2);
+        let (n, dir) = (tri.n[k], tri.dir[k]);
+        let (px, py) = (xbase + l as f64, rc.y);
+        let e = n.x * px + n.y * py + tri.c[k];
+        let s = tri.sd[k].x * px + tri.sd[k].y * py + tri.sc[k];
         let sc = s.clamp(0.0, 1.0);
         // p − q with q = v_k + sc·dir_k, from p − v_k = s·dir_k + e·n_k.
-        let g = (tri.dir[k] * (s - sc) + tri.n[k] * e) * coef[l];
+        let c = coef[l];
+        let g = DVec2::new((dir.x * (s - sc) + n.x * e) * c, (dir.y * (s - sc) + n.y * e) * c);
         records.push(Record {
             px: (li0 + base + l) as u32,
             a: tri.idx[k],
-            b: tri.idx[(k + 1) % 3],
+            b: tri.next[k],
             ga: g * (1.0 - sc),
             gb: g * sc,
         });
