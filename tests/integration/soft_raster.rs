@@ -627,14 +627,17 @@ fn time_views(label: &str, mesh: &Mesh, pose: &Pose, cams: &[Camera], s: &SoftSe
         }
         let t1 = t0.elapsed().as_secs_f64();
         let t0 = std::time::Instant::now();
-        evaluate_views(&mut views, mesh, pose, s, &loss, true).unwrap();
+        let l = evaluate_views(&mut views, mesh, pose, s, &loss, true).unwrap();
         let t2 = t0.elapsed().as_secs_f64();
+        // The pose is off its targets: a positive loss with a gradient.
+        assert!(l.total > 0.0 && l.gradient.iter().any(|g| g.abs() > 1e-6));
         let t0 = std::time::Instant::now();
         let mut ne = NormalEquations::default();
         for v in views.iter_mut() {
             v.normal_equations(mesh, pose, s, &loss, 0.25, &mut ne).unwrap();
         }
         let t3 = t0.elapsed().as_secs_f64();
+        assert!(ne.cost > 0.0 && (0..9).all(|i| ne.jtj[i][i] >= 0.0));
         best = [best[0].min(t1), best[1].min(t2), best[2].min(t3)];
     }
     println!(

@@ -1,0 +1,275 @@
+//! [`Session`]: the fit as JavaScript drives it — stepping (by count or by time
+//! budget, timed with `Date.now()`), progress with the pose and full-resolution IoUs,
+//! per-view overlays for `ImageData`, the loss trace and the result (SPEC §3).
+
+use super::{to_js, FileSet};
+use crate::error::Result;
+use crate::estimator::{Estimator, FitSettings, Progress};
+use crate::mask::Mask;
+use crate::mesh::Mesh;
+use crate::pose::Pose;
+use crate::result::PoseOut;
+use crate::view::View;
+use crate::{metrics, overlay, raster};
+use serde::Serialize;
+use wasm_bindgen::prelude::*;
+use wasm_bindgen::Clamped;
+
+/// A fit in progress: the estimator, the time spent stepping it, the loss of every
+/// refinement iteration, and the silhouettes rendered at the current pose (cached
+/// until the next step).
+#[wasm_bindgen]
+pub struct Session {
+    est: Estimator,
+    initial_pose: Option<Pose>,
+    ground_truth: Option<Pose>,
+    seconds: f64,
+    losses: Vec<f64>,
+    iteration: usize,
+    rendered: Option<Vec<Mask>>,
+    warnings: Vec<String>,
+}
+
+/// Progress as JavaScript sees it: the core's, plus the pose and full-resolution IoUs.
+#[derive(Serialize)]
+struct ProgressOut<'a> {
+    #[serde(flatten)]
+    core: &'a Progress,
+    pose: PoseOut,
+    stages: usize,
+    done: bool,
+    seconds: f64,
+    iou: Vec<f64>,
+}
+
+#[derive(Serialize)]
+struct ViewInfo<'a> {
+    name: &'a str,
+    width: u32,
+    height: u32,
+    has_image: bool,
+}
+
+impl Session {
+    /// A session over a loaded mesh and views.
+    pub fn new(
+        mesh: Mesh,
+        views: Vec<View>,
+        initial_pose: Option<Pose>,
+        ground_truth: Option<Pose>,
+    ) -> Result<Session> {
+        let est = Estimator::new(mesh, views, initial_pose, FitSettings::default())?;
+        Ok(Session {
+            est,
+            initial_pose,
+            ground_truth,
+            seconds: 0.0,
+            losses: Vec::new(),
+            iteration: 0,
+            rendered: None,
+            warnings: Vec::new(),
+        })
+    }
+
+    /// The estimator.
+    pub fn estimator(&self) -> &Estimator {
+        &self.est
+    }
+
+    /// One step, recording the loss when an optimiser iteration was done.
+    fn step_once(&mut self) -> Progress {
+        let p = self.est.step();
+        if p.iteration > self.iteration {
+            self.iteration = p.iteration;
+            self.losses.push(p.loss);
+        }
+        self.rendered = None;
+        p
+    }
+
+    /// The full-resolution silhouettes at the current pose (rendered once per step).
+    fn rendered(&mut self) -> &[Mask] {
+        let est = &self.est;
+        self.rendered.get_or_insert_with(|| {
+            let pose = est.pose();
+            est.views()
+                .iter()
+                .map(|v| raster::hard::render(est.mesh(), &pose, &v.camera))
+                .collect()
+        })
+    }
+
+    /// Full-resolution hard IoU per view at the current pose.
+    pub fn full_ious(&mut self) -> Vec<f64> {
+        let rendered = self.rendered().to_vec();
+        self.est
+            .views()
+            .iter()
+            .zip(&rendered)
+            .map(|(v, m)| metrics::hard_iou(m, &v.mask))
+            .collect()
+    }
+
+    fn progress_out(&mut self, p: &Progress) -> Result<JsValue, JsError> {
+        let iou = self.full_ious();
+        to_js(&ProgressOut {
+            core: p,
+            pose: PoseOut::from_pose(&p.pose),
+            stages: self.est.settings().stages.len(),
+            done: self.est.is_done(),
+            seconds: self.seconds,
+            iou,
+        })
+    }
+}
+
+#[wasm_bindgen]
+impl Session {
+    /// A session from a scene file's text and the files it names (mesh, masks, images),
+    /// matched by path relative to the scene file, then by file name.
+    #[wasm_bindgen(js_name = fromScene)]
+    pub fn from_scene(scene_file: &str, scene_text: &str, files: &FileSet) -> Result<Session, JsError> {
+        let (scene, warnings) = files.load_scene(scene_file, scene_text)?;
+        let mut session = Session::new(scene.mesh, scene.views, scene.initial_pose, scene.ground_truth_pose)?;
+        session.warnings = warnings;
+        Ok(session)
+    }
+
+    /// The number of views.
+    #[wasm_bindgen(getter, js_name = viewCount)]
+    pub fn view_count(&self) -> usize {
+        self.est.views().len()
+    }
+
+    /// Each view's name and size.
+    #[wasm_bindgen(unchecked_return_type = "ViewInfo[]")]
+    pub fn views(&self) -> Result<JsValue, JsError> {
+        let info: Vec<ViewInfo> = self
+            .est
+            .views()
+            .iter()
+            .map(|v| ViewInfo {
+                name: &v.name,
+                width: v.camera.width,
+                height: v.camera.height,
+                has_image: v.image.is_some(),
+            })
+            .collect();
+        to_js(&info)
+    }
+
+    /// Does `n` units of work (each a batch of search candidates or one optimiser
+    /// iteration; fewer once the fit is done) and reports where the fit stands.
+    #[wasm_bindgen(unchecked_return_type = "Progress")]
+    pub fn step(&mut self, n: u32) -> Result<JsValue, JsError> {
+        let t0 = js_sys::Date::now();
+        let mut p = None;
+        for _ in 0..n {
+            if self.est.is_done() {
+                break;
+            }
+            p = Some(self.step_once());
+        }
+        self.seconds += (js_sys::Date::now() - t0) / 1000.0;
+        let p = p.unwrap_or_else(|| self.est.progress());
+        self.progress_out(&p)
+    }
+
+    /// Steps until `budget_ms` milliseconds have passed (at least one step) or the fit
+    /// is done; reports where the fit stands.
+    #[wasm_bindgen(js_name = stepFor, unchecked_return_type = "Progress")]
+    pub fn step_for(&mut self, budget_ms: f64) -> Result<JsValue, JsError> {
+        let t0 = js_sys::Date::now();
+        let mut p = None;
+        while !self.est.is_done() {
+            p = Some(self.step_once());
+            if js_sys::Date::now() - t0 >= budget_ms {
+                break;
+            }
+        }
+        self.seconds += (js_sys::Date::now() - t0) / 1000.0;
+        let p = p.unwrap_or_else(|| self.est.progress());
+        self.progress_out(&p)
+    }
+
+    /// Where the fit stands, without stepping.
+    #[wasm_bindgen(unchecked_return_type = "Progress")]
+    pub fn progress(&mut self) -> Result<JsValue, JsError> {
+        let p = self.est.progress();
+        self.progress_out(&p)
+    }
+
+    /// What was left out when the session was made (images not given).
+    pub fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+
+    /// Whether the fit has finished.
+    #[wasm_bindgen(getter)]
+    pub fn done(&self) -> bool {
+        self.est.is_done()
+    }
+
+    /// Seconds spent stepping so far.
+    #[wasm_bindgen(getter)]
+    pub fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    /// The current pose (the best so far once done).
+    #[wasm_bindgen(unchecked_return_type = "PoseOut")]
+    pub fn pose(&self) -> Result<JsValue, JsError> {
+        to_js(&PoseOut::from_pose(&self.est.pose()))
+    }
+
+    /// The loss of every refinement iteration so far, all candidates, in order.
+    pub fn losses(&self) -> Vec<f64> {
+        self.losses.clone()
+    }
+
+    /// Full-resolution hard IoU per view at the current pose.
+    #[wasm_bindgen(js_name = viewIou)]
+    pub fn view_iou(&mut self) -> Vec<f64> {
+        self.full_ious()
+    }
+
+    /// View `view`'s overlay at the current pose: its image (or mask), the mask's
+    /// outline and the rendered contour, RGBA8, the view's width × height, for `ImageData`.
+    pub fn overlay(&mut self, view: usize) -> Result<Clamped<Vec<u8>>, JsError> {
+        let n = self.est.views().len();
+        if view >= n {
+            return Err(JsError::new(&format!("no view {view}: the session has {n} views")));
+        }
+        let rendered = self.rendered()[view].clone();
+        Ok(Clamped(overlay::overlay(&self.est.views()[view], Some(&rendered)).data))
+    }
+
+    /// The result (SPEC §3) at the current pose, as an object.
+    #[wasm_bindgen(unchecked_return_type = "FitResult")]
+    pub fn result(&self) -> Result<JsValue, JsError> {
+        to_js(&self.est.result(self.seconds, self.ground_truth.as_ref()))
+    }
+
+    /// The result (SPEC §3) at the current pose, as pretty JSON text.
+    #[wasm_bindgen(js_name = resultJson)]
+    pub fn result_json(&self) -> Result<String, JsError> {
+        let r = self.est.result(self.seconds, self.ground_truth.as_ref());
+        serde_json::to_string_pretty(&r).map_err(|e| JsError::new(&format!("internal error: {e}")))
+    }
+
+    /// Starts the fit again from the beginning (same inputs, time and losses cleared).
+    pub fn reset(&mut self) -> Result<(), JsError> {
+        let est = Estimator::new(
+            self.est.mesh().clone(),
+            self.est.views().to_vec(),
+            self.initial_pose,
+            self.est.settings().clone(),
+        )?;
+        self.est = est;
+        self.seconds = 0.0;
+        self.losses.clear();
+        self.iteration = 0;
+        self.rendered = None;
+        Ok(())
+    }
+}
