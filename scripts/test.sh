@@ -12,8 +12,6 @@ echo "== native tests"
 cargo test --locked
 echo "== wasm32 build of the library"
 cargo build --locked --lib --release --target wasm32-unknown-unknown
-echo "== native reference for the wasm suites"
-cargo test --locked --test wasm_parity
 echo "== wasm tests in headless Chromium and in Node"
 if command -v wasm-pack >/dev/null; then
   # wasm-pack uses the wasm-bindgen-test-runner on PATH when its version matches Cargo.lock.

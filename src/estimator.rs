@@ -334,14 +334,15 @@ impl Estimator {
         RefineTarget::new(&self.views, s, self.settings.lambda_iou, self.settings.lambda_contour)
     }
 
-    /// Does one unit of work and reports where the fit stands.
+    /// Does one unit of work and reports where the fit stands. To keep a step cheap,
+    /// its `view_iou` is left empty: [`Estimator::progress`] fills it.
     pub fn step(&mut self) -> Progress {
         match self.phase {
             Phase::Search => self.search_step(),
             Phase::Refine => self.refine_step(),
             Phase::Done => {}
         }
-        self.progress()
+        self.snapshot(Vec::new())
     }
 
     /// Steps until done (at most `max_steps`); returns the last progress.
@@ -512,7 +513,8 @@ impl Estimator {
         }
     }
 
-    /// A snapshot of the state.
+    /// A snapshot of the state, with the hard IoU of every view at the current
+    /// stage's resolution (the search's 64 px during the search).
     pub fn progress(&self) -> Progress {
         let pose = self.pose();
         let view_iou = match (&self.phase, &self.target) {
@@ -526,6 +528,11 @@ impl Estimator {
                 .collect(),
             (_, Some(t)) => t.hard_ious(&self.mesh, &pose),
         };
+        self.snapshot(view_iou)
+    }
+
+    fn snapshot(&self, view_iou: Vec<f64>) -> Progress {
+        let pose = self.pose();
         Progress {
             phase: self.phase,
             iteration: self.iterations,

@@ -129,15 +129,13 @@ pub fn run(a: &FitArgs) -> CliResult {
             Phase::Refine | Phase::Done => {
                 let stages = est.settings().stages.len();
                 bar.set_position(30 + (70 * p.stage / stages.max(1)) as u64);
-                let iou = p.view_iou.iter().sum::<f64>() / p.view_iou.len().max(1) as f64;
                 bar.set_message(format!(
-                    "refine stage {}/{} candidate {} iter {} loss {:.4} IoU {:.3}",
+                    "refine stage {}/{} candidate {} iter {} loss {:.5}",
                     p.stage + 1,
                     stages,
                     p.candidate + 1,
                     p.iteration,
-                    p.loss,
-                    iou
+                    p.loss
                 ));
             }
         }
