@@ -279,7 +279,11 @@ pub fn symmetries(mesh: &crate::mesh::Mesh) -> Vec<glam::DMat3> {
     for perm in [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]] {
         for signs in 0..8u32 {
             let sign = |k: u32| if signs >> k & 1 == 1 { -1.0 } else { 1.0 };
-            let m = DMat3::from_cols(axes[perm[0]] * sign(0), axes[perm[1]] * sign(1), axes[perm[2]] * sign(2));
+            let m = DMat3::from_cols(
+                axes[perm[0]] * sign(0),
+                axes[perm[1]] * sign(1),
+                axes[perm[2]] * sign(2),
+            );
             if (m.determinant() - 1.0).abs() > 1e-9 || m == DMat3::IDENTITY {
                 continue;
             }
@@ -309,11 +313,20 @@ pub fn compose_symmetry(gt: &crate::Pose, s: glam::DMat3, c: glam::DVec3) -> cra
     let rotation = gt.rotation * s;
     // gt(S(X − c) + c) = R·(s_gt ⊙ (S X)) + R·(s_gt ⊙ (c − S c)) + t.
     let translation = gt.translation + gt.rotation * (gt.scale * (c - s * c));
-    crate::Pose { rotation, translation, scale }
+    crate::Pose {
+        rotation,
+        translation,
+        scale,
+    }
 }
 
 /// Among the symmetric equivalents of `gt`, the one closest to `est` (by ADD).
-pub fn closest_equivalent(mesh: &crate::mesh::Mesh, syms: &[glam::DMat3], est: &crate::Pose, gt: &crate::Pose) -> crate::Pose {
+pub fn closest_equivalent(
+    mesh: &crate::mesh::Mesh,
+    syms: &[glam::DMat3],
+    est: &crate::Pose,
+    gt: &crate::Pose,
+) -> crate::Pose {
     let c = mesh.bounds().map_or(glam::DVec3::ZERO, |b| b.centre());
     syms.iter()
         .map(|s| compose_symmetry(gt, *s, c))

@@ -6,7 +6,9 @@ use super::files::{load_scene_file, to_json, write, CliResult};
 use super::fit::FitOptions;
 use indicatif::{ProgressBar, ProgressStyle};
 use localisebot::estimator::{Estimator, FitSettings};
-use localisebot::eval::{accuracy_measure, closest_equivalent, report_markdown, summarise, symmetries, SceneOutcome, Summary};
+use localisebot::eval::{
+    accuracy_measure, closest_equivalent, report_markdown, summarise, symmetries, SceneOutcome, Summary,
+};
 use localisebot::{grasp, Pose, Scene};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -138,7 +140,13 @@ fn evaluate_scene(path: &Path, settings: &FitSettings, curve: bool) -> CliResult
     let symmetric = syms.len() > 1;
     // A symmetric object's pose is known up to its symmetries: measure against the
     // equivalent of the truth closest to the estimate.
-    let truth = |p: &Pose| if symmetric { closest_equivalent(&scene.mesh, &syms, p, &gt) } else { gt };
+    let truth = |p: &Pose| {
+        if symmetric {
+            closest_equivalent(&scene.mesh, &syms, p, &gt)
+        } else {
+            gt
+        }
+    };
     let n = scene.views.len();
     let (est, secs) = fit(&scene, n, settings).map_err(|e| format!("{}: {e}", path.display()))?;
     let gt_eq = truth(&est.pose());

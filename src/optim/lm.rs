@@ -55,7 +55,9 @@ impl Lm {
         apply: impl Fn(&Pose, &[f64; 9]) -> Pose,
     ) -> Pose {
         match &self.accepted {
-            Some((_, prev)) if ne.cost.partial_cmp(&prev.cost) != Some(std::cmp::Ordering::Less) => self.lambda = (self.lambda * 4.0).min(1e8),
+            Some((_, prev)) if ne.cost.partial_cmp(&prev.cost) != Some(std::cmp::Ordering::Less) => {
+                self.lambda = (self.lambda * 4.0).min(1e8)
+            }
             _ => {
                 self.lambda = (self.lambda / 3.0).max(1e-7);
                 self.accepted = Some((pose, ne));
