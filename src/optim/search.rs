@@ -105,16 +105,23 @@ pub fn fit_size(w: u32, h: u32, max_side: u32) -> (u32, u32) {
     )
 }
 
-/// Area (pixels) and centroid of a bit mask.
+/// Area (pixels) and centroid of a bit mask, by popcount per word and trailing-zero
+/// walks over the set bits.
 pub fn stats(b: &BitMask) -> (f64, DVec2) {
+    let stride = b.stride();
     let (mut n, mut sx, mut sy) = (0u64, 0u64, 0u64);
-    for y in 0..b.height {
-        for x in 0..b.width {
-            if b.get(x, y) {
-                n += 1;
-                sx += x as u64;
-                sy += y as u64;
-            }
+    for (i, &w) in b.words.iter().enumerate() {
+        if w == 0 {
+            continue;
+        }
+        let (y, x0) = ((i / stride) as u64, 64 * (i % stride) as u64);
+        let c = w.count_ones() as u64;
+        n += c;
+        sy += y * c;
+        let mut bits = w;
+        while bits != 0 {
+            sx += x0 + bits.trailing_zeros() as u64;
+            bits &= bits - 1;
         }
     }
     if n == 0 {
@@ -200,4 +207,36 @@ pub fn select_best(mut all: Vec<Candidate>, keep: usize, min_sep_deg: f64) -> Ve
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mask::Mask;
+
+    #[test]
+    fn stats_match_the_mask() {
+        let mut m = Mask::empty(130, 7);
+        for (x, y) in [(0, 0), (63, 1), (64, 1), (129, 6), (70, 3)] {
+            m.data[y * 130 + x] = 1;
+        }
+        let (n, c) = stats(&BitMask::from_mask(&m));
+        assert_eq!(n, m.area() as f64);
+        assert!((c - m.centroid().unwrap()).length() < 1e-12);
+        assert_eq!(stats(&BitMask::from_mask(&Mask::empty(5, 5))).0, 0.0);
+    }
+
+    #[test]
+    fn keeps_distinct_candidates() {
+        let c = |deg: f64, score: f64| Candidate {
+            pose: Pose {
+                rotation: DMat3::from_rotation_z(deg.to_radians()),
+                ..Pose::IDENTITY
+            },
+            score,
+        };
+        let best = select_best(vec![c(0.0, 0.9), c(10.0, 0.95), c(90.0, 0.5), c(200.0, 0.7)], 3, 30.0);
+        let scores: Vec<f64> = best.iter().map(|c| c.score).collect();
+        assert_eq!(scores, vec![0.95, 0.7, 0.5], "0° is within 30° of the better 10°");
+    }
 }
