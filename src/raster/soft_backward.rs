@@ -94,10 +94,11 @@ impl SoftSilhouette {
             for r in tile.records {
                 let c = &ct[r.px as usize];
                 let (a, b) = (r.a as usize * K, r.b as usize * K);
-                let (ga, gb) = (f64x2::from(r.ga.to_array()), f64x2::from(r.gb.to_array()));
+                let (ga, gb) = (f64x2::new(r.ga.to_array()), f64x2::new(r.gb.to_array()));
                 for f in 0..K {
-                    out[a + f] += ga * c[f];
-                    out[b + f] += gb * c[f];
+                    let cf = f64x2::new([c[f]; 2]);
+                    out[a + f] += ga * cf;
+                    out[b + f] += gb * cf;
                 }
             }
         });
@@ -222,7 +223,7 @@ impl SoftRasterizer {
                 }
             }
             self.vertex_jac
-                .push(rows.map(|r| std::array::from_fn(|c| f64x2::from([r[2 * c], r[2 * c + 1]]))));
+                .push(rows.map(|r| std::array::from_fn(|c| f64x2::new([r[2 * c], r[2 * c + 1]]))));
         }
     }
 
@@ -278,7 +279,8 @@ impl SoftRasterizer {
                     continue;
                 }
                 let (ma, mb) = (&vj[rec.a as usize], &vj[rec.b as usize]);
-                let (ax, ay, bx, by) = (rec.ga.x * t, rec.ga.y * t, rec.gb.x * t, rec.gb.y * t);
+                let [ax, ay, bx, by] =
+                    [rec.ga.x * t, rec.ga.y * t, rec.gb.x * t, rec.gb.y * t].map(|v| f64x2::new([v; 2]));
                 let row = &mut rows[rec.px as usize];
                 for c in 0..5 {
                     row[c] += ma[0][c] * ax + ma[1][c] * ay + mb[0][c] * bx + mb[1][c] * by;
@@ -291,7 +293,7 @@ impl SoftRasterizer {
                     if !(SATURATION..1.0).contains(&t) {
                         continue;
                     }
-                    let jr: [f64; 10] = bytemuck::cast(rows[li]);
+                    let jr: [f64; 10] = std::array::from_fn(|c| rows[li][c / 2].to_array()[c % 2]);
                     let rp = residual((tile.y0 + ly) * w + tile.x0 + lx, 1.0 - t);
                     for a in 0..POSE_DIM {
                         jtr[a] += jr[a] * rp;

@@ -228,43 +228,52 @@ pub(crate) struct Pass<'a> {
 /// Lanes processed together (a row chunk of the tile; `TILE` is a multiple).
 const LANES: usize = std::mem::size_of::<F>() / 8;
 
+/// A vector with every lane `v`. (`wide`'s own `splat` and `From` go through
+/// `bytemuck::cast`, whose debug-build precondition checks made the kernel five times
+/// slower with debug assertions on; `new` is a plain transmute.)
+#[inline(always)]
+const fn sp(v: f64) -> F {
+    F::new([v; LANES])
+}
+
 /// `e^{−z}` per lane for z ≥ 0, to within a few ulps: range reduction by ln 2 and a
 /// degree-11 Taylor polynomial on |r| ≤ ln2/2 (truncation error < 1e-14), branch-free.
 /// z is clamped to 708 (e^{−708} ≈ 3e-308).
 #[inline(always)]
 fn exp_neg_lanes(z: F) -> F {
-    const LOG2E: f64 = std::f64::consts::LOG2_E;
+    const LOG2E: F = sp(std::f64::consts::LOG2_E);
     // fdlibm's split of ln 2: LN2_HI has trailing zero bits, so k·LN2_HI is exact.
-    const LN2_HI: f64 = f64::from_bits(0x3FE6_2E42_FEE0_0000);
-    const LN2_LO: f64 = f64::from_bits(0x3DEA_39EF_3579_3C76);
+    const LN2_HI: F = sp(f64::from_bits(0x3FE6_2E42_FEE0_0000));
+    const LN2_LO: F = sp(f64::from_bits(0x3DEA_39EF_3579_3C76));
     // Round to nearest by the 1.5·2^52 trick: the low bits of `kk` then hold k.
-    const MAGIC: f64 = 6_755_399_441_055_744.0;
-    const C: [f64; 12] = [
-        1.0 / 39_916_800.0,
-        1.0 / 3_628_800.0,
-        1.0 / 362_880.0,
-        1.0 / 40_320.0,
-        1.0 / 5_040.0,
-        1.0 / 720.0,
-        1.0 / 120.0,
-        1.0 / 24.0,
-        1.0 / 6.0,
-        0.5,
-        1.0,
-        1.0,
+    const MAGIC: F = sp(6_755_399_441_055_744.0);
+    const ZMAX: F = sp(708.0);
+    const C: [F; 12] = [
+        sp(1.0 / 39_916_800.0),
+        sp(1.0 / 3_628_800.0),
+        sp(1.0 / 362_880.0),
+        sp(1.0 / 40_320.0),
+        sp(1.0 / 5_040.0),
+        sp(1.0 / 720.0),
+        sp(1.0 / 120.0),
+        sp(1.0 / 24.0),
+        sp(1.0 / 6.0),
+        sp(0.5),
+        sp(1.0),
+        sp(1.0),
     ];
-    let z = z.fast_min(F::splat(708.0));
+    const EXP_ONE: U = U::new([1023u64 << 52; LANES]);
+    let z = z.fast_min(ZMAX);
     let kk = z * LOG2E + MAGIC;
     let kf = kk - MAGIC;
     let r = (kf * LN2_HI - z) + kf * LN2_LO;
-    let mut p = F::splat(C[0]);
+    let mut p = C[0];
     for c in &C[1..] {
         p = p * r + *c;
     }
     // 2^−k: exponent field 1023 − k (k = low bits of kk, 0 ≤ k ≤ 1022).
     let bits: U = bytemuck::cast(kk);
-    let scale = U::splat(1023u64 << 52) - (bits << 52u32);
-    p * bytemuck::cast::<U, F>(scale)
+    p * bytemuck::cast::<U, F>(EXP_ONE - (bits << 52u32))
 }
 
 /// Per-row constants of one triangle: at pixel x of the row,
@@ -275,14 +284,17 @@ struct RowConsts {
     rs: [f64; 3],
 }
 
-/// Per-triangle lane constants: `n_k.x·l` and `sd_k.x·l` for lane l.
+/// Per-triangle lane constants: lane offsets l, `n_k.x·l`, `sd_k.x·l` and the edge
+/// lengths.
 struct LaneConsts {
+    offs: F,
     ne: [F; 3],
     ns: [F; 3],
+    len: [F; 3],
 }
 
 /// One chunk of `LANES` pixels of a tile row: multiplies the row's transmittance
-/// `row[base..base + LANES]` by `1 − D` for the lanes with `lo ≤ base + l ≤ hi`
+/// lanes `row[base / LANES]` by `1 − D` for the lanes with `lo ≤ base + l ≤ hi`
 /// (pixel x = `xbase + l`) and, with `REC`, pushes their records.
 ///
 /// The squared distance to the boundary is the smallest squared distance to the
@@ -295,7 +307,7 @@ fn chunk<const REC: bool>(
     tri: &TriSetup,
     rc: &RowConsts,
     lc: &LaneConsts,
-    row: &mut [f64],
+    row: &mut [F],
     li0: usize,
     xbase: f64,
     lo: usize,
@@ -305,44 +317,45 @@ fn chunk<const REC: bool>(
     m2: f64,
     records: &mut Vec<Record>,
 ) {
-    let zero = F::ZERO;
-    let one = F::ONE;
-    let lane = F::from(std::array::from_fn::<f64, LANES, _>(|l| (base + l) as f64));
-    let tcur = F::from(std::array::from_fn::<f64, LANES, _>(|l| row[base + l]));
-    let live = lane.cmp_ge(F::splat(lo as f64)) & lane.cmp_le(F::splat(hi as f64)) & tcur.cmp_ge(F::splat(SATURATION));
-    let mut d2 = F::splat(f64::INFINITY);
-    let mut emin = d2;
-    let mut best_k = zero;
+    const ZERO: F = sp(0.0);
+    const ONE: F = sp(1.0);
+    const INF: F = sp(f64::INFINITY);
+    const SAT: F = sp(SATURATION);
+    let lane = lc.offs + sp(base as f64);
+    let tcur = row[base / LANES];
+    let live = lane.cmp_ge(sp(lo as f64)) & lane.cmp_le(sp(hi as f64)) & tcur.cmp_ge(SAT);
+    let mut d2 = INF;
+    let mut emin = INF;
+    let mut best_k = ZERO;
     for k in 0..3 {
-        let e = lc.ne[k] + (tri.n[k].x * xbase + rc.re[k]);
-        let s = lc.ns[k] + (tri.sd[k].x * xbase + rc.rs[k]);
-        let excess = (zero - s).fast_max(s - one).fast_max(zero) * tri.len[k];
+        let e = lc.ne[k] + sp(tri.n[k].x * xbase + rc.re[k]);
+        let s = lc.ns[k] + sp(tri.sd[k].x * xbase + rc.rs[k]);
+        let excess = (ZERO - s).fast_max(s - ONE).fast_max(ZERO) * lc.len[k];
         let sd = e * e + excess * excess;
         if REC {
-            best_k = sd.cmp_lt(d2).blend(F::splat(k as f64), best_k);
+            best_k = sd.cmp_lt(d2).blend(sp(k as f64), best_k);
         }
         d2 = d2.fast_min(sd);
         emin = emin.fast_min(e);
     }
-    let inside = emin.cmp_gt(zero);
-    let keep = live & (inside | d2.cmp_lt(F::splat(m2)));
+    let inside = emin.cmp_gt(ZERO);
+    let keep = live & (inside | d2.cmp_lt(sp(m2)));
     let mask = keep.move_mask();
     if mask == 0 {
         return;
     }
-    let u = exp_neg_lanes(d2 * inv_sigma);
-    let inv = one / (one + u);
+    let u = exp_neg_lanes(d2 * sp(inv_sigma));
+    let inv = ONE / (ONE + u);
     let uinv = u * inv;
     // Inside: D = 1/(1 + u), 1 − D = u/(1 + u); outside the reverse.
-    let tnew = (tcur * keep.blend(inside.blend(uinv, inv), one)).to_array();
-    row[base..base + LANES].copy_from_slice(&tnew);
+    row[base / LANES] = tcur * keep.blend(inside.blend(uinv, inv), ONE);
     if !REC {
         return;
     }
     // ∂A/∂d² = δ·T·D/σ, and ∂d²/∂a = −2(1 − s)(p − q), ∂d²/∂b = −2s(p − q): the
     // record keeps c = −2δ·D/σ, to be multiplied by T once it is final.
     let coef = inside
-        .blend(inv * (-2.0 * inv_sigma), uinv * (2.0 * inv_sigma))
+        .blend(inv * sp(-2.0 * inv_sigma), uinv * sp(2.0 * inv_sigma))
         .to_array();
     let best_k = best_k.to_array();
     for l in 0..LANES {
@@ -384,7 +397,9 @@ pub(crate) fn run<const REC: bool>(
     let bins = pass.bins;
     trans.fill(1.0);
     let mut t = [1.0f64; TILE * TILE];
-    let offs = F::from(std::array::from_fn::<f64, LANES, _>(|l| l as f64));
+    // The tile's transmittance in lanes while it is rendered (`t` is its f64 copy).
+    let mut tl = [sp(1.0); TILE * TILE / LANES];
+    let offs = F::new(std::array::from_fn(|l| l as f64));
     for ty in 0..bins.tiles_y {
         for tx in 0..bins.tiles_x {
             let ti = ty * bins.tiles_x + tx;
@@ -396,13 +411,15 @@ pub(crate) fn run<const REC: bool>(
             let tw = TILE.min(pass.width - x0);
             let th = TILE.min(pass.height - y0);
             let (tx1, ty1) = ((x0 + tw - 1) as i32, (y0 + th - 1) as i32);
-            t.fill(1.0);
+            tl.fill(sp(1.0));
             records.clear();
             for &k in list {
                 let tri = &pass.tris[k as usize];
                 let lc = LaneConsts {
-                    ne: std::array::from_fn(|k| offs * tri.n[k].x),
-                    ns: std::array::from_fn(|k| offs * tri.sd[k].x),
+                    offs,
+                    ne: std::array::from_fn(|k| offs * sp(tri.n[k].x)),
+                    ns: std::array::from_fn(|k| offs * sp(tri.sd[k].x)),
+                    len: std::array::from_fn(|k| sp(tri.len[k])),
                 };
                 let xl = tri.x0.max(x0 as i32);
                 let xh = tri.x1.min(tx1);
@@ -417,7 +434,7 @@ pub(crate) fn run<const REC: bool>(
                         rs: std::array::from_fn(|k| tri.sd[k].y * yf + tri.sc[k]),
                     };
                     let li0 = (y as usize - y0) * TILE;
-                    let row = &mut t[li0..li0 + TILE];
+                    let row = &mut tl[li0 / LANES..(li0 + TILE) / LANES];
                     let (lo, hi) = (xa as usize - x0, xb as usize - x0);
                     let mut base = lo / LANES * LANES;
                     while base <= hi {
@@ -426,6 +443,9 @@ pub(crate) fn run<const REC: bool>(
                         base += LANES;
                     }
                 }
+            }
+            for (i, v) in tl.iter().enumerate() {
+                t[i * LANES..(i + 1) * LANES].copy_from_slice(&v.to_array());
             }
             for ly in 0..th {
                 let o = (y0 + ly) * pass.width + x0;
@@ -452,7 +472,7 @@ mod tests {
         let mut worst = 0.0f64;
         for i in 0..(76000 / LANES) {
             let z: [f64; LANES] = std::array::from_fn(|o| (LANES * i + o) as f64 * 0.0093);
-            let got = exp_neg_lanes(F::from(z)).to_array();
+            let got = exp_neg_lanes(F::new(z)).to_array();
             for l in 0..LANES {
                 if z[l] <= 708.0 {
                     worst = worst.max((got[l] / (-z[l]).exp() - 1.0).abs());
@@ -460,9 +480,9 @@ mod tests {
             }
         }
         assert!(worst < 1e-14, "{worst}");
-        assert_eq!(exp_neg_lanes(F::ZERO).to_array(), [1.0; LANES]);
+        assert_eq!(exp_neg_lanes(sp(0.0)).to_array(), [1.0; LANES]);
         for z in [800.0, f64::INFINITY, 708.0, 1e300] {
-            assert!(exp_neg_lanes(F::splat(z)).to_array().iter().all(|&v| v < 1e-300));
+            assert!(exp_neg_lanes(sp(z)).to_array().iter().all(|&v| v < 1e-300));
         }
     }
 
