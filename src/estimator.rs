@@ -247,6 +247,9 @@ impl Estimator {
             centre,
             radius,
         };
+        // Cells of about two pixels at the search resolution: silhouettes within a pixel.
+        // The search and the refinement stages at that resolution or below use it.
+        est.search_mesh = est.mesh.clustered(est.settings.search.resolution * 3 / 8);
         match initial_pose {
             Some(p) => {
                 p.validate()?;
@@ -257,8 +260,6 @@ impl Estimator {
                 est.start = est.initial_guess()?;
                 est.rotations = est.settings.search.sampling.rotations();
                 est.low = search::low_res_views(&est.views, est.settings.search.resolution);
-                // Cells of about two pixels at the search resolution: silhouettes within a pixel.
-                est.search_mesh = est.mesh.clustered(est.settings.search.resolution * 3 / 8);
             }
         }
         Ok(est)
@@ -277,6 +278,11 @@ impl Estimator {
     /// The settings in use.
     pub fn settings(&self) -> &FitSettings {
         &self.settings
+    }
+
+    /// The phase and refinement stage the next step will work in.
+    pub fn progress_phase(&self) -> (Phase, usize) {
+        (self.phase, self.stage)
     }
 
     /// Whether the fit has finished.
@@ -397,11 +403,16 @@ impl Estimator {
             .target
             .as_mut()
             .expect("a refinement target exists in the refine phase");
+        let mesh = if stage.resolution <= self.settings.search.resolution {
+            &self.search_mesh
+        } else {
+            &self.mesh
+        };
         let t = &mut self.tracks[self.current];
         let length = self.radius * t.pose.scale.max_element();
         let loss = match stage.optimiser {
             Optimiser::Adam => {
-                let (loss, grad) = target.loss_and_gradient(&self.mesh, &t.pose);
+                let (loss, grad) = target.loss_and_gradient(mesh, &t.pose);
                 let frac = self.iter_in_stage as f64 / stage.iterations.max(1) as f64;
                 let lr = stage.lr_start * (stage.lr_end / stage.lr_start).powf(frac);
                 let mut g = params::scale_gradient(&grad, length);
@@ -416,7 +427,7 @@ impl Estimator {
                 loss
             }
             Optimiser::LevenbergMarquardt => {
-                let ne = target.normal_equations(&self.mesh, &t.pose);
+                let ne = target.normal_equations(mesh, &t.pose);
                 let loss = 2.0 * ne.cost;
                 record(t, loss);
                 let free = match self.settings.scale_mode {

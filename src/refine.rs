@@ -58,10 +58,10 @@ impl StageSettings {
             StageSettings {
                 resolution: 64,
                 sigma: 1.0,
-                iterations: 25,
+                iterations: 15,
                 lr_start: 1.0,
                 lr_end: 0.3,
-                keep: 3,
+                keep: 2,
                 contour: false,
                 optimiser: lm,
             },
@@ -107,7 +107,6 @@ struct StageView {
     bits: BitMask,
     contour: Option<ContourTarget>,
     raster: SoftRasterizer,
-    d_alpha: Vec<f64>,
 }
 
 /// The stage's views and loss weights.
@@ -138,7 +137,6 @@ impl RefineTarget {
                     bits: BitMask::from_mask(&mask),
                     contour,
                     raster: SoftRasterizer::new(),
-                    d_alpha: Vec::new(),
                 }
             })
             .collect();
@@ -170,6 +168,12 @@ impl RefineTarget {
         (total / n, grad.map(|g| g / n))
     }
 
+    /// Sets the soft rasteriser's ε (default 1e-4): outside pairs with `D < ε` are
+    /// skipped, a jump of size ε in A that finite-difference checks must avoid.
+    pub fn set_eps(&mut self, eps: f64) {
+        self.soft.eps = eps;
+    }
+
     /// Number of views.
     pub fn view_count(&self) -> usize {
         self.views.len()
@@ -179,17 +183,36 @@ impl RefineTarget {
     /// [`RefineTarget::loss_and_gradient`]). An unrenderable pose gives an infinite loss.
     pub fn view_loss_and_gradient(&mut self, i: usize, mesh: &Mesh, pose: &Pose) -> (f64, [f64; 9]) {
         let v = &mut self.views[i];
-        if v.raster.render(mesh, pose, &v.camera, &self.soft).is_err() {
+        let mask = &v.mask;
+        let weights = v.contour.as_ref().map(|c| c.gradient());
+        // One sweep: the silhouette and the 9-gradients of Σ M·A, Σ (1 − M)·A and
+        // Σ w·A (w the contour loss's ∂L/∂A), which combine into the loss's gradient
+        // once the IoU's sums are known.
+        let fields = v
+            .raster
+            .render_with_gradients::<3>(mesh, pose, &v.camera, &self.soft, |p| {
+                let m = mask[p] as f64;
+                [m, 1.0 - m, weights.map_or(0.0, |w| w[p])]
+            });
+        let Ok([g_mask, g_background, g_contour]) = fields else {
             return (f64::INFINITY, [0.0; 9]);
-        }
+        };
         let alpha = &v.raster.silhouette().alpha;
-        v.d_alpha.clear();
-        v.d_alpha.resize(alpha.len(), 0.0);
-        let mut loss = self.lambda_iou * iou::soft_iou_loss_grad(alpha, &v.mask, self.lambda_iou, &mut v.d_alpha);
-        if let Some(c) = &v.contour {
-            loss += self.lambda_contour * c.loss_grad(alpha, self.lambda_contour, &mut v.d_alpha);
+        let (inter, union) = iou::soft_iou_sums(alpha, mask);
+        // ∂IoU-loss/∂A = −1/U on the mask and I/U² off it.
+        let (d_in, d_out) = (-1.0 / union, inter / (union * union));
+        let mut loss = self.lambda_iou * (1.0 - inter / union);
+        let mut grad = [0.0; 9];
+        for k in 0..9 {
+            grad[k] = self.lambda_iou * (d_in * g_mask[k] + d_out * g_background[k]);
         }
-        (loss, v.raster.backward(&v.d_alpha))
+        if let Some(c) = &v.contour {
+            loss += self.lambda_contour * c.loss(alpha);
+            for k in 0..9 {
+                grad[k] += self.lambda_contour * g_contour[k];
+            }
+        }
+        (loss, grad)
     }
 
     /// The Gauss–Newton normal equations of the residuals `A_p − M_p` over all views
@@ -231,5 +254,124 @@ impl RefineTarget {
     pub fn hard_score(&self, mesh: &Mesh, pose: &Pose) -> f64 {
         let v = self.hard_ious(mesh, pose);
         v.iter().sum::<f64>() / v.len().max(1) as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::so3;
+    use crate::synth::{blob_mesh, synthesize, SynthSettings};
+    use glam::DVec3;
+
+    fn perturb(p: &Pose, k: usize, h: f64) -> Pose {
+        let mut e = DVec3::ZERO;
+        e[k % 3] = h;
+        match k / 3 {
+            0 => Pose {
+                rotation: p.rotation * so3::exp(e),
+                ..*p
+            },
+            1 => Pose {
+                translation: p.translation + e,
+                ..*p
+            },
+            _ => Pose {
+                scale: p.scale * e.exp(),
+                ..*p
+            },
+        }
+    }
+
+    fn setup(contour: bool) -> (Mesh, RefineTarget, Pose) {
+        let mesh = blob_mesh(8, 12);
+        let s = synthesize(
+            &mesh,
+            &SynthSettings {
+                views: 2,
+                width: 40,
+                height: 32,
+                seed: 9,
+                ..Default::default()
+            },
+            None,
+        )
+        .unwrap();
+        let views: Vec<View> = s
+            .cameras
+            .iter()
+            .zip(&s.masks)
+            .enumerate()
+            .map(|(i, (c, m))| View {
+                name: format!("v{i}"),
+                camera: *c,
+                mask: m.clone(),
+                image: None,
+            })
+            .collect();
+        let stage = StageSettings {
+            resolution: 40,
+            sigma: 1.5,
+            iterations: 1,
+            lr_start: 1.0,
+            lr_end: 1.0,
+            keep: 1,
+            contour,
+            optimiser: Optimiser::Adam,
+        };
+        let mut t = RefineTarget::new(&views, &stage, 1.0, 0.7);
+        t.set_eps(1e-12);
+        let off = Pose {
+            rotation: s.pose.rotation * so3::exp(DVec3::new(0.05, -0.08, 0.03)),
+            translation: s.pose.translation + DVec3::new(0.04, -0.03, 0.02),
+            scale: s.pose.scale * DVec3::new(1.05, 0.95, 1.02),
+        };
+        (mesh, t, off)
+    }
+
+    #[test]
+    fn loss_gradient_matches_central_differences() {
+        for contour in [false, true] {
+            let (mesh, mut t, pose) = setup(contour);
+            let (_, g) = t.loss_and_gradient(&mesh, &pose);
+            let h = 1e-6;
+            for k in 0..9 {
+                let fd = (t.loss_and_gradient(&mesh, &perturb(&pose, k, h)).0
+                    - t.loss_and_gradient(&mesh, &perturb(&pose, k, -h)).0)
+                    / (2.0 * h);
+                let tol = 1e-4 * g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!(
+                    (fd - g[k]).abs() < tol,
+                    "contour {contour}, parameter {k}: analytic {} vs fd {fd}",
+                    g[k]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn normal_equations_gradient_is_the_cost_gradient() {
+        // Jᵀr is the gradient of ½Σw r²: check it against central differences of the cost.
+        let (mesh, mut t, pose) = setup(false);
+        let ne = t.normal_equations(&mesh, &pose);
+        let h = 1e-6;
+        for k in 0..9 {
+            let fd = (t.normal_equations(&mesh, &perturb(&pose, k, h)).cost
+                - t.normal_equations(&mesh, &perturb(&pose, k, -h)).cost)
+                / (2.0 * h);
+            let tol = 1e-4 * ne.jtr.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(
+                (fd - ne.jtr[k]).abs() < tol,
+                "parameter {k}: Jᵀr {} vs fd {fd}",
+                ne.jtr[k]
+            );
+        }
+        // JᵀJ is symmetric positive semi-definite: its diagonal is non-negative.
+        for i in 0..9 {
+            assert!(ne.jtj[i][i] >= 0.0);
+            for j in 0..9 {
+                assert!((ne.jtj[i][j] - ne.jtj[j][i]).abs() <= 1e-12 * ne.jtj[i][i].abs().max(1.0));
+            }
+        }
     }
 }

@@ -116,11 +116,17 @@ pub fn run(a: &FitArgs) -> CliResult {
             .progress_chars("=> "),
     );
     let mut search_s = 0.0;
+    let mut stage_s = vec![0.0; est.settings().stages.len()];
+    let mut last = Instant::now();
     while !est.is_done() {
+        let before = est.progress_phase();
         let p = est.step();
-        if p.phase != Phase::Search && search_s == 0.0 {
-            search_s = start.elapsed().as_secs_f64();
+        let now = Instant::now();
+        match before {
+            (Phase::Search, _) => search_s += (now - last).as_secs_f64(),
+            (_, stage) => stage_s[stage] += (now - last).as_secs_f64(),
         }
+        last = now;
         match p.phase {
             Phase::Search => {
                 bar.set_position((30 * p.searched / p.search_total.max(1)) as u64);
@@ -159,11 +165,12 @@ pub fn run(a: &FitArgs) -> CliResult {
         }
     }
     let mut line = format!(
-        "{}: mean IoU {:.4} in {:.2} s (search {:.2} s; {} iterations, {:?})",
+        "{}: mean IoU {:.4} in {:.2} s (search {:.2} s, stages {} s; {} iterations, {:?})",
         a.out.display(),
         result.mean_iou,
         seconds,
         search_s,
+        stage_s.iter().map(|s| format!("{s:.2}")).collect::<Vec<_>>().join("/"),
         result.iterations,
         result.termination
     );

@@ -226,9 +226,9 @@ fn the_papers_euler_grid_search_also_finds_the_object() {
     let s = synthesize(
         &m,
         &SynthSettings {
-            views: 3,
-            width: 96,
-            height: 96,
+            views: 4,
+            width: 128,
+            height: 128,
             seed: 4,
             ..Default::default()
         },
