@@ -45,6 +45,7 @@ struct Row {
     fwd_bwd_ms: f64,
     fit_s: Option<f64>,
     fit_add_rel: Option<f64>,
+    fit_iou: Option<f64>,
 }
 
 /// Runs `bench`.
@@ -73,6 +74,7 @@ pub fn run(a: &BenchArgs) -> CliResult {
             fwd_bwd_ms: ms,
             fit_s: None,
             fit_add_rel: None,
+            fit_iou: None,
         });
     } else {
         let duck = io::load_mesh("Duck.glb", DUCK, &io::no_files).map_err(|e| e.to_string())?;
@@ -94,8 +96,8 @@ pub fn run(a: &BenchArgs) -> CliResult {
                 let s = synthesize(mesh, &synth, None).map_err(|e| e.to_string())?;
                 let views = to_views(&s.cameras, &s.masks);
                 let ms = time_fwd_bwd(mesh, &views, &s.pose, size, a.sigma, reps);
-                let (fit_s, fit_add_rel) = if a.no_fit || size != 256 {
-                    (None, None)
+                let (fit_s, fit_add_rel, fit_iou) = if a.no_fit || size != 256 {
+                    (None, None, None)
                 } else {
                     let start = Instant::now();
                     let mut est = Estimator::new(mesh.clone(), views.clone(), None, FitSettings::default())
@@ -103,7 +105,7 @@ pub fn run(a: &BenchArgs) -> CliResult {
                     est.run(usize::MAX);
                     let secs = start.elapsed().as_secs_f64();
                     let r = est.result(secs, Some(&s.pose));
-                    (Some(secs), r.errors.map(|e| e.add_rel))
+                    (Some(secs), r.errors.map(|e| e.add_rel), Some(r.mean_iou))
                 };
                 rows.push(Row {
                     mesh: name.clone(),
@@ -114,6 +116,7 @@ pub fn run(a: &BenchArgs) -> CliResult {
                     fwd_bwd_ms: ms,
                     fit_s,
                     fit_add_rel,
+                    fit_iou,
                 });
             }
         }
@@ -179,6 +182,9 @@ fn print_rows(rows: &[Row], json: bool) {
             if let Some(s) = r.fit_add_rel {
                 v["fit_add_rel"] = s.into();
             }
+            if let Some(s) = r.fit_iou {
+                v["fit_iou"] = s.into();
+            }
             println!("{v}");
         }
         return;
@@ -190,9 +196,10 @@ fn print_rows(rows: &[Row], json: bool) {
     for r in rows {
         let fit = r.fit_s.map_or("-".to_string(), |s| format!("{s:.2}"));
         let add = r.fit_add_rel.map_or("-".to_string(), |s| format!("{:.2}%", 100.0 * s));
+        let iou = r.fit_iou.map_or("-".to_string(), |s| format!("{s:.4}"));
         println!(
-            "{:<28} {:>9} {:>5} {:>6} {:>7.3} {:>12.3} {:>8} {:>9}",
-            r.mesh, r.triangles, r.views, r.size, r.sigma, r.fwd_bwd_ms, fit, add
+            "{:<28} {:>9} {:>5} {:>6} {:>7.3} {:>12.3} {:>8} {:>9} {:>8}",
+            r.mesh, r.triangles, r.views, r.size, r.sigma, r.fwd_bwd_ms, fit, add, iou
         );
     }
 }
