@@ -28,6 +28,7 @@ pub struct Session {
     iteration: usize,
     rendered: Option<Vec<Mask>>,
     warnings: Vec<String>,
+    grasps: Vec<crate::grasp::Grasp>,
 }
 
 /// Progress as JavaScript sees it: the core's, plus the pose and full-resolution IoUs.
@@ -68,6 +69,7 @@ impl Session {
             iteration: 0,
             rendered: None,
             warnings: Vec::new(),
+            grasps: Vec::new(),
         })
     }
 
@@ -132,6 +134,7 @@ impl Session {
         let (scene, warnings) = files.load_scene(scene_file, scene_text)?;
         let mut session = Session::new(scene.mesh, scene.views, scene.initial_pose, scene.ground_truth_pose)?;
         session.warnings = warnings;
+        session.grasps = scene.grasps;
         Ok(session)
     }
 
@@ -241,7 +244,11 @@ impl Session {
             return Err(JsError::new(&format!("no view {view}: the session has {n} views")));
         }
         let rendered = self.rendered()[view].clone();
-        Ok(Clamped(overlay::overlay(&self.est.views()[view], Some(&rendered)).data))
+        let v = &self.est.views()[view];
+        let mut img = overlay::overlay(v, Some(&rendered));
+        // The scene's grasps, carried by the current pose into this view.
+        crate::grasp::draw_grasps(&mut img, &self.grasps, &self.est.pose(), &v.camera);
+        Ok(Clamped(img.data))
     }
 
     /// The result (SPEC §3) at the current pose, as an object.

@@ -189,11 +189,21 @@ fn files_are_matched_by_path_then_by_name_then_by_content() {
         "not from another folder"
     );
     // A whole scene from flat names loads, masks and images in their places.
-    let session = Session::from_scene("scene.json", &text(&EXAMPLE, "example/scene.json"), &set).unwrap();
+    let mut session = Session::from_scene("scene.json", &text(&EXAMPLE, "example/scene.json"), &set).unwrap();
     let views = session.estimator().views();
     assert_eq!(views.len(), 4);
     assert!(views.iter().all(|v| v.image.is_some() && v.mask.area() > 1000));
     assert!(session.warnings().is_empty());
+    // The example's grasps are drawn (cyan) over the views at the current pose.
+    let cyan = (0..4).any(|i| {
+        session
+            .overlay(i)
+            .unwrap()
+            .0
+            .chunks_exact(4)
+            .any(|p| p == [0, 220, 255, 255])
+    });
+    assert!(cyan, "grasp rectangles appear on the views");
     // Images are for display: without them the scene loads, with a warning per view.
     let masks_only: Vec<_> = EXAMPLE
         .iter()
