@@ -297,18 +297,7 @@ mod tests {
             None,
         )
         .unwrap();
-        let views: Vec<View> = s
-            .cameras
-            .iter()
-            .zip(&s.masks)
-            .enumerate()
-            .map(|(i, (c, m))| View {
-                name: format!("v{i}"),
-                camera: *c,
-                mask: m.clone(),
-                image: None,
-            })
-            .collect();
+        let views = s.views();
         let stage = StageSettings {
             resolution: 40,
             sigma: 1.5,

@@ -60,6 +60,23 @@ pub struct SynthScene {
     pub images: Vec<Rgba>,
 }
 
+impl SynthScene {
+    /// The scene's views, named `view0`, `view1`, … (no images).
+    pub fn views(&self) -> Vec<crate::view::View> {
+        self.cameras
+            .iter()
+            .zip(&self.masks)
+            .enumerate()
+            .map(|(i, (c, m))| crate::view::View {
+                name: format!("view{i}"),
+                camera: *c,
+                mask: m.clone(),
+                image: None,
+            })
+            .collect()
+    }
+}
+
 /// A rotation drawn uniformly from SO(3).
 pub fn random_rotation(rng: &mut SmallRng) -> DMat3 {
     // Shoemake's method.
@@ -243,36 +260,21 @@ mod tests {
     #[test]
     fn synthetic_scene_keeps_the_object_inside_every_view() {
         let m = blob_mesh(11, 25);
-        let s = synthesize(
-            &m,
-            &SynthSettings {
-                views: 5,
-                width: 96,
-                height: 64,
-                seed: 3,
-                ..Default::default()
-            },
-            None,
-        )
-        .unwrap();
+        let settings = SynthSettings {
+            views: 5,
+            width: 96,
+            height: 64,
+            seed: 3,
+            ..Default::default()
+        };
+        let s = synthesize(&m, &settings, None).unwrap();
         assert_eq!(s.cameras.len(), 5);
         for (c, k) in s.cameras.iter().zip(&s.masks) {
             assert!(k.area() > 100 && !k.touches_border());
             assert!(c.to_camera(s.pose.translation).z > 0.0);
         }
+        assert_eq!(s.views()[4].name, "view4");
         // Deterministic for a seed.
-        let again = synthesize(
-            &m,
-            &SynthSettings {
-                views: 5,
-                width: 96,
-                height: 64,
-                seed: 3,
-                ..Default::default()
-            },
-            None,
-        )
-        .unwrap();
-        assert_eq!(again.pose, s.pose);
+        assert_eq!(synthesize(&m, &settings, None).unwrap().pose, s.pose);
     }
 }

@@ -94,7 +94,7 @@ pub fn run(a: &BenchArgs) -> CliResult {
                     ..Default::default()
                 };
                 let s = synthesize(mesh, &synth, None).map_err(|e| e.to_string())?;
-                let views = to_views(&s.cameras, &s.masks);
+                let views = s.views();
                 let ms = time_fwd_bwd(mesh, &views, &s.pose, size, a.sigma, reps);
                 let (fit_s, fit_add_rel, fit_iou) = if a.no_fit || size != 256 {
                     (None, None, None)
@@ -123,20 +123,6 @@ pub fn run(a: &BenchArgs) -> CliResult {
     }
     print_rows(&rows, a.json);
     Ok(())
-}
-
-fn to_views(cameras: &[localisebot::Camera], masks: &[localisebot::Mask]) -> Vec<View> {
-    cameras
-        .iter()
-        .zip(masks)
-        .enumerate()
-        .map(|(i, (c, m))| View {
-            name: format!("view{i}"),
-            camera: *c,
-            mask: m.clone(),
-            image: None,
-        })
-        .collect()
 }
 
 /// Median milliseconds of one multi-view loss + 9-gradient at `pose`.

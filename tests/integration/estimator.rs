@@ -4,27 +4,13 @@ use crate::fixture;
 use localisebot::estimator::{Estimator, FitSettings, Phase};
 use localisebot::metrics::pose_errors;
 use localisebot::synth::{synthesize, SynthSettings};
-use localisebot::{io, load_scene, Camera, Mesh, Pose, View};
+use localisebot::{io, load_scene, Mesh, Pose};
 
 fn mesh(rel: &str) -> Mesh {
     let path = fixture(rel);
     let bytes = std::fs::read(&path).unwrap();
     let dir = path.parent().unwrap().to_path_buf();
     io::load_mesh(&path.to_string_lossy(), &bytes, &|u| std::fs::read(dir.join(u)).ok()).unwrap()
-}
-
-fn views(cameras: &[Camera], masks: &[localisebot::Mask]) -> Vec<View> {
-    cameras
-        .iter()
-        .zip(masks)
-        .enumerate()
-        .map(|(i, (c, m))| View {
-            name: format!("view{i}"),
-            camera: *c,
-            mask: m.clone(),
-            image: None,
-        })
-        .collect()
 }
 
 #[test]
@@ -42,7 +28,7 @@ fn duck_is_found_from_no_initial_pose() {
         None,
     )
     .unwrap();
-    let mut est = Estimator::new(m.clone(), views(&s.cameras, &s.masks), None, FitSettings::default()).unwrap();
+    let mut est = Estimator::new(m.clone(), s.views(), None, FitSettings::default()).unwrap();
     let first = est.step();
     assert_eq!(first.phase, Phase::Search);
     let last = est.run(100_000);
@@ -116,7 +102,7 @@ fn one_view_is_allowed() {
         None,
     )
     .unwrap();
-    let mut est = Estimator::new(m, views(&s.cameras, &s.masks), None, FitSettings::default()).unwrap();
+    let mut est = Estimator::new(m, s.views(), None, FitSettings::default()).unwrap();
     est.run(100_000);
     // One view cannot fix depth against scale, but the silhouette must match.
     let r = est.result(0.0, None);
@@ -138,7 +124,7 @@ fn an_object_behind_a_camera_is_named() {
         None,
     )
     .unwrap();
-    let mut v = views(&s.cameras, &s.masks);
+    let mut v = s.views();
     // Turn view1's camera around: it now looks away from the object.
     let c = v[1].camera;
     v[1].camera.rotation = glam::DMat3::from_diagonal(glam::DVec3::new(-1.0, 1.0, -1.0)) * c.rotation;
@@ -172,9 +158,7 @@ fn bad_settings_are_refused() {
     .unwrap();
     let mut settings = FitSettings::default();
     settings.stages[0].sigma = f64::NAN;
-    let e = Estimator::new(m, views(&s.cameras, &s.masks), None, settings)
-        .err()
-        .unwrap();
+    let e = Estimator::new(m, s.views(), None, settings).err().unwrap();
     assert!(e.to_string().contains("sigma"), "{e}");
 }
 
@@ -194,7 +178,7 @@ fn the_search_ranks_the_true_orientation_first_and_refits_translation_and_scale(
         None,
     )
     .unwrap();
-    let low = low_res_views(&views(&s.cameras, &s.masks), 64);
+    let low = low_res_views(&s.views(), 64);
     let centre = m.bounds().unwrap().centre();
     // The true rotation, but translation and scale off: the re-fit brings them back.
     let mut start = s.pose;
@@ -237,7 +221,7 @@ fn the_papers_euler_grid_search_also_finds_the_object() {
     .unwrap();
     let mut settings = FitSettings::default();
     settings.search.sampling = Sampling::EulerGrid(8);
-    let mut est = Estimator::new(m.clone(), views(&s.cameras, &s.masks), None, settings).unwrap();
+    let mut est = Estimator::new(m.clone(), s.views(), None, settings).unwrap();
     let p = est.step();
     assert_eq!(p.search_total, 512);
     est.run(100_000);
