@@ -2,12 +2,11 @@
 //! (camera as an object or JSON text; mask and image as PNG bytes or RGBA pixels),
 //! each checked as it arrives.
 
-use super::{json_text, FileRole, FileSet, Session};
+use super::{json_text, FileSet, Session};
 use crate::camera::{Camera, CameraJson};
 use crate::error::{Error, Result};
 use crate::io::mask::{decode_image, decode_mask, mask_from_rgba};
 use crate::io::scene::check_mask;
-use crate::io::{join, load_mesh, parent_dir};
 use crate::mask::Mask;
 use crate::mesh::Mesh;
 use crate::pose::{Pose, PoseJson};
@@ -76,16 +75,7 @@ impl SessionBuilder {
     /// Sets the mesh from its file's bytes (`.glb`, `.gltf`, `.obj`); `extra` holds
     /// the files a `.gltf` refers to (its `.bin` buffers), by name.
     pub fn mesh(&mut self, file_name: &str, bytes: &[u8], extra: Option<FileSet>) -> Result<(), JsError> {
-        let extra = extra.unwrap_or_default();
-        let dir = parent_dir(file_name);
-        let resolve = |uri: &str| {
-            extra
-                .find(&join(dir, uri), FileRole::Other)
-                .ok()
-                .flatten()
-                .map(<[u8]>::to_vec)
-        };
-        self.mesh = Some(load_mesh(file_name, bytes, &resolve)?);
+        self.mesh = Some(extra.unwrap_or_default().load_mesh(file_name, bytes)?);
         Ok(())
     }
 

@@ -71,6 +71,19 @@ impl FileSet {
 }
 
 impl FileSet {
+    /// Loads a mesh file's bytes; a `.gltf`'s buffers are taken from this set, by
+    /// their URI joined onto the mesh's folder (then by name, like every lookup here).
+    pub fn load_mesh(&self, file_name: &str, bytes: &[u8]) -> Result<crate::mesh::Mesh> {
+        let dir = parent_dir(file_name);
+        let resolve = |uri: &str| {
+            self.find(&join(dir, uri), FileRole::Other)
+                .ok()
+                .flatten()
+                .map(<[u8]>::to_vec)
+        };
+        load_mesh(file_name, bytes, &resolve)
+    }
+
     /// The file a scene asks for as `wanted`: the file of that exact path; else the
     /// one whose path ends with it, or it with the file's (`masks/a.png` is served by
     /// `scene/masks/a.png` or by a bare `a.png`, never by `images/a.png`); else the
@@ -191,13 +204,5 @@ impl FileSet {
 /// Checks a mesh file; returns its triangle count. `extra` supplies a `.gltf`'s buffers.
 #[wasm_bindgen(js_name = checkMesh)]
 pub fn check_mesh(file_name: &str, bytes: &[u8], extra: &FileSet) -> Result<usize, JsError> {
-    let dir = parent_dir(file_name);
-    let resolve = |uri: &str| {
-        extra
-            .find(&join(dir, uri), FileRole::Other)
-            .ok()
-            .flatten()
-            .map(<[u8]>::to_vec)
-    };
-    Ok(load_mesh(file_name, bytes, &resolve)?.triangles.len())
+    Ok(extra.load_mesh(file_name, bytes)?.triangles.len())
 }
