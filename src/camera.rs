@@ -81,7 +81,15 @@ fn cam_err(view: &str, problem: impl Into<String>) -> Error {
 
 impl CameraJson {
     /// Validates and converts to an OpenCV [`Camera`]; `view` names the view in errors.
+    /// A rotation slightly off SO(3) is projected (see [`CameraJson::to_camera_with_warning`]).
     pub fn to_camera(&self, view: &str) -> Result<Camera> {
+        self.to_camera_with_warning(view).map(|(c, _)| c)
+    }
+
+    /// As [`CameraJson::to_camera`], with the warning to show when the extrinsics'
+    /// rotation was off SO(3) by more than rounding (up to [`so3::SO3_TOLERANCE`]) and
+    /// was projected onto the nearest rotation.
+    pub fn to_camera_with_warning(&self, view: &str) -> Result<(Camera, Option<String>)> {
         for (name, v) in [("fx", self.fx), ("fy", self.fy), ("cx", self.cx), ("cy", self.cy)] {
             if !v.is_finite() {
                 return Err(cam_err(view, format!("{name} is not a finite number")));
@@ -102,7 +110,7 @@ impl CameraJson {
                 ),
             ));
         }
-        let w2c = match (self.world_to_camera, self.camera_to_world) {
+        let (key, rows) = match (self.world_to_camera, self.camera_to_world) {
             (Some(_), Some(_)) => {
                 return Err(cam_err(
                     view,
@@ -110,24 +118,32 @@ impl CameraJson {
                 ))
             }
             (None, None) => return Err(cam_err(view, "needs world_to_camera or camera_to_world")),
-            (Some(m), None) => check_rigid(view, "world_to_camera", m)?,
-            (None, Some(m)) => check_rigid(view, "camera_to_world", m)?.inverse(),
+            (Some(m), None) => ("world_to_camera", m),
+            (None, Some(m)) => ("camera_to_world", m),
         };
+        let (m, deviation) = check_rigid(view, key, rows)?;
+        let w2c = if key == "world_to_camera" { m } else { rigid_inverse(m) };
         let w2c = match self.convention {
             Convention::Opencv => w2c,
             Convention::Opengl => DMat4::from_diagonal(glam::DVec4::new(1.0, -1.0, -1.0, 1.0)) * w2c,
         };
-        let rot = so3::orthonormalize(DMat3::from_mat4(w2c));
-        Ok(Camera {
+        let warning = (deviation > so3::SO3_SILENT).then(|| {
+            format!(
+                "view '{view}': camera: {key}'s rotation is off SO(3) by {deviation:.2e} \
+                 (max |RᵀR − I|, |det − 1|): projected onto the nearest rotation"
+            )
+        });
+        let camera = Camera {
             width: self.width,
             height: self.height,
             fx: self.fx,
             fy: self.fy,
             cx: self.cx,
             cy: self.cy,
-            rotation: rot,
+            rotation: DMat3::from_mat4(w2c),
             translation: w2c.w_axis.truncate(),
-        })
+        };
+        Ok((camera, warning))
     }
 
     /// The wire form of a camera (world_to_camera, OpenCV).
@@ -146,7 +162,21 @@ impl CameraJson {
     }
 }
 
-fn check_rigid(view: &str, key: &str, rows: [[f64; 4]; 4]) -> Result<DMat4> {
+/// The inverse of a rigid transform whose rotation is exactly orthonormal.
+fn rigid_inverse(m: DMat4) -> DMat4 {
+    let r = DMat3::from_mat4(m).transpose();
+    let t = -(r * m.w_axis.truncate());
+    DMat4::from_cols(
+        r.x_axis.extend(0.0),
+        r.y_axis.extend(0.0),
+        r.z_axis.extend(0.0),
+        t.extend(1.0),
+    )
+}
+
+/// Checks a 4×4 rigid transform from the wire; returns it with its rotation
+/// projected onto SO(3), and the rotation's deviation from SO(3).
+fn check_rigid(view: &str, key: &str, rows: [[f64; 4]; 4]) -> Result<(DMat4, f64)> {
     if rows.iter().flatten().any(|v| !v.is_finite()) {
         return Err(cam_err(view, format!("{key} contains a non-finite number")));
     }
@@ -159,22 +189,19 @@ fn check_rigid(view: &str, key: &str, rows: [[f64; 4]; 4]) -> Result<DMat4> {
     }
     let m = mat4_from_rows(rows);
     let r = DMat3::from_mat4(m);
-    let e = so3::orthonormality_error(r);
-    if e > 1e-3 {
-        let why = if r.determinant().abs() < 1e-6 {
-            "singular"
-        } else {
-            "not orthonormal"
-        };
-        return Err(cam_err(
+    let (rot, e) = so3::accept_rotation(r).map_err(|why| {
+        cam_err(
             view,
-            format!(
-                "{key}'s rotation part is {why} (|RᵀR − I|, |det − 1| up to {e:.2e}; rows {:?})",
-                mat3_to_rows(r)
-            ),
-        ));
-    }
-    Ok(m)
+            format!("{key}'s rotation part {why} (rows {:?})", mat3_to_rows(r)),
+        )
+    })?;
+    let out = DMat4::from_cols(
+        rot.x_axis.extend(0.0),
+        rot.y_axis.extend(0.0),
+        rot.z_axis.extend(0.0),
+        m.w_axis.truncate().extend(1.0),
+    );
+    Ok((out, e))
 }
 
 impl Camera {
@@ -354,6 +381,32 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("needs world_to_camera"));
+    }
+
+    #[test]
+    fn near_orthonormal_rotations_load_with_a_warning() {
+        let mut m = ID_Z2;
+        m[0][1] = 9e-3; // as far off as LM-O's annotations
+        let (c, w) = json(m).to_camera_with_warning("cam3").unwrap();
+        let w = w.expect("a warning");
+        assert!(w.contains("'cam3'") && w.contains("9.00e-3"), "{w}");
+        assert!(so3::orthonormality_error(c.rotation) < 1e-12);
+        let (_, w) = json(ID_Z2).to_camera_with_warning("cam3").unwrap();
+        assert!(w.is_none());
+        // Beyond the tolerance, and the bad-input corpus: refused.
+        m[0][1] = 0.2;
+        assert!(json(m)
+            .to_camera("v")
+            .unwrap_err()
+            .to_string()
+            .contains("not orthonormal"));
+        let mut doubled = ID_Z2;
+        for r in doubled.iter_mut().take(3) {
+            for v in r.iter_mut().take(3) {
+                *v *= 2.0;
+            }
+        }
+        assert!(json(doubled).to_camera("v").is_err());
     }
 
     #[test]

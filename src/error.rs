@@ -35,6 +35,40 @@ pub enum Error {
         /// What is wrong with it.
         problem: String,
     },
+    /// A mask (or ignore mask) whose size is not its camera's.
+    #[error("view '{view}': mask '{file}': is {}×{} but the camera is {}×{}", size.0, size.1, expected.0, expected.1)]
+    MaskSize {
+        /// The view's name.
+        view: String,
+        /// The mask file's name.
+        file: String,
+        /// Its width and height.
+        size: (u32, u32),
+        /// The camera's width and height.
+        expected: (u32, u32),
+    },
+    /// A mask with no object pixel (or none outside the ignore mask).
+    #[error("view '{view}': mask '{file}': {}", if *ignored { "every object pixel is in the ignore mask: nothing is left to fit" } else { "is empty: no pixel is marked as object" })]
+    EmptyMask {
+        /// The view's name.
+        view: String,
+        /// The mask file's name.
+        file: String,
+        /// Whether the mask has object pixels, all of them ignored.
+        ignored: bool,
+    },
+    /// An image whose size is not its camera's.
+    #[error("view '{view}': image '{file}': is {}×{} but the camera is {}×{}", size.0, size.1, expected.0, expected.1)]
+    ImageSize {
+        /// The view's name.
+        view: String,
+        /// The image file's name.
+        file: String,
+        /// Its width and height.
+        size: (u32, u32),
+        /// The camera's width and height.
+        expected: (u32, u32),
+    },
     /// An image could not be decoded or has the wrong size.
     #[error("view '{view}': image '{file}': {problem}")]
     Image {

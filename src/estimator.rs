@@ -1,20 +1,29 @@
 //! The pipeline as a step-wise object (SPEC §4): initialise, search orientations,
-//! refine the best candidates coarse-to-fine, report. [`Estimator::step`] does one
+//! refine the best candidates coarse-to-fine, judge. [`Estimator::step`] does one
 //! small unit of work (a batch of search candidates or one optimiser iteration) so
-//! that a UI can show every iteration; the state keeps the best pose so far.
-//! The same object drives the command line and the browser.
+//! that a UI can show every iteration; the state keeps the best pose so far. The
+//! same object, with the same [`FitSettings::default`], drives the command line, the
+//! browser and the npm package.
+//!
+//! Every stage works on the views' windows ([`WindowMode`]) through one
+//! [`Objective`]: the search scores its hard IoUs, the stages descend
+//! `λ1·IoU + λ2·contour` with Levenberg–Marquardt (its Gauss–Newton model) or Adam.
 
 use crate::error::{Error, Result};
+use crate::loss::objective::{Objective, ObjectiveSettings};
+use crate::loss::target::{Window, WindowMode};
 use crate::mask::Mask;
 use crate::mesh::Mesh;
 use crate::metrics;
 use crate::optim::adam::{Adam, AdamSettings};
 use crate::optim::lm::{self, Free, Lm};
-use crate::optim::search::{self, Candidate, LowResView, SearchSettings};
+use crate::optim::schedule::{Optimiser, StageSettings};
+use crate::optim::search::{self, Candidate, SearchSettings};
 use crate::optim::{init, params};
 use crate::pose::Pose;
-use crate::raster::hard;
-use crate::refine::{Optimiser, RefineTarget, StageSettings};
+use crate::raster::hard::{self, BitMask};
+use crate::raster::soft::SoftSettings;
+use crate::verdict::{self, Judgement, Verdict, VerdictThresholds};
 use crate::view::View;
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
@@ -27,28 +36,36 @@ pub enum ScaleMode {
     Anisotropic,
     /// One scale for all axes (7-DoF).
     Isotropic,
-    /// The CAD model is to scale: the scale stays at the initial value (1 unless given).
+    /// The CAD model is to scale: the scale stays at the initial value (1 unless an
+    /// initial pose gives another), in the search and every stage.
     Fixed,
 }
 
-/// Everything the fit can be told.
+/// Everything the fit can be told. [`FitSettings::default`] is the one default of
+/// the command line, the browser, the npm package and `bench`.
 #[derive(Debug, Clone)]
 pub struct FitSettings {
     /// The coarse orientation search.
     pub search: SearchSettings,
     /// The coarse-to-fine refinement stages, in order.
     pub stages: Vec<StageSettings>,
+    /// The optimiser of every stage (default Levenberg–Marquardt).
+    pub optimiser: Optimiser,
     /// Adam's step sizes (multiplied by each stage's factor).
     pub adam: AdamSettings,
-    /// Loss weight of the soft IoU term, λ1 (default 1).
+    /// Loss weight λ1 of the soft IoU term (default 1).
     pub lambda_iou: f64,
-    /// Loss weight of the contour (Hausdorff) term, λ2 (default 0.1, applied in the stages that enable it).
+    /// Loss weight λ2 of the contour (chamfer) term (default 1).
     pub lambda_contour: f64,
-    /// How the scale is fitted.
+    /// How the scale is fitted (default anisotropic).
     pub scale_mode: ScaleMode,
+    /// Each view's window (default: the whole image).
+    pub window: WindowMode,
     /// A stage ends for a candidate when its best loss improved by less than this
     /// (relative) over 5 iterations (default 1e-3); in the last stage that is convergence.
     pub tolerance: f64,
+    /// Where the verdict's lines are drawn.
+    pub verdict: VerdictThresholds,
 }
 
 impl Default for FitSettings {
@@ -56,11 +73,14 @@ impl Default for FitSettings {
         FitSettings {
             search: SearchSettings::default(),
             stages: StageSettings::default_schedule(),
+            optimiser: Optimiser::LevenbergMarquardt,
             adam: AdamSettings::default(),
             lambda_iou: 1.0,
-            lambda_contour: 0.1,
+            lambda_contour: 1.0,
             scale_mode: ScaleMode::Anisotropic,
+            window: WindowMode::Full,
             tolerance: 1e-3,
+            verdict: VerdictThresholds::default(),
         }
     }
 }
@@ -73,17 +93,33 @@ impl FitSettings {
             return bad("at least one refinement stage is needed".into());
         }
         for (i, s) in self.stages.iter().enumerate() {
-            if !(s.sigma > 0.0 && s.sigma.is_finite()) || s.resolution < 8 || s.keep == 0 {
-                return bad(format!("stage {i}: sigma must be > 0, resolution ≥ 8 and keep ≥ 1"));
+            if !(s.sigma > 0.0 && s.sigma.is_finite()) || s.resolution < 8 || s.keep == 0 || s.iterations == 0 {
+                return bad(format!(
+                    "stage {i}: sigma must be > 0, resolution ≥ 8, keep ≥ 1 and iterations ≥ 1"
+                ));
             }
         }
         if self.search.keep == 0 || self.search.resolution < 8 {
             return bad("search: keep ≥ 1 and resolution ≥ 8".into());
         }
-        if !(self.lambda_iou >= 0.0 && self.lambda_contour >= 0.0) || self.lambda_iou + self.lambda_contour == 0.0 {
-            return bad("λ1 and λ2 must be ≥ 0 and not both 0".into());
+        if let WindowMode::Object { margin } = self.window {
+            if !(margin.is_finite() && margin >= 0.0) {
+                return bad(format!("window margin must be ≥ 0, got {margin}"));
+            }
         }
-        Ok(())
+        self.objective(&self.stages[0]).validate()
+    }
+
+    /// The objective's settings at `stage`.
+    pub fn objective(&self, stage: &StageSettings) -> ObjectiveSettings {
+        ObjectiveSettings {
+            soft: SoftSettings {
+                sigma: stage.sigma,
+                eps: 1e-4,
+            },
+            lambda_iou: self.lambda_iou,
+            lambda_contour: self.lambda_contour,
+        }
     }
 }
 
@@ -99,15 +135,16 @@ pub enum Phase {
     Done,
 }
 
-/// Why the fit stopped.
+/// Why the fit stopped. A fit whose verdict is `failed` is never `converged`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Termination {
-    /// The loss stopped improving by more than the tolerance.
+    /// The loss stopped improving by more than the tolerance, at a pose the views accept.
     Converged,
     /// The last stage ran all its iterations.
     MaxIterations,
-    /// The loss rose or stayed flat for long: the best pose so far was kept.
+    /// The loss stopped improving at a pose the views reject, or rose or stayed flat
+    /// for long: the best pose so far was kept.
     Stalled,
 }
 
@@ -118,23 +155,26 @@ pub struct Progress {
     pub phase: Phase,
     /// Optimiser iterations done so far (all candidates, all stages).
     pub iteration: usize,
-    /// Search candidates scored so far / in all.
+    /// Search candidates scored so far.
     pub searched: usize,
     /// Number of search candidates in all.
     pub search_total: usize,
-    /// Refinement stage (0-based) and candidate being refined.
+    /// Refinement stage (0-based).
     pub stage: usize,
     /// Candidate index being refined.
     pub candidate: usize,
-    /// The loss at the current pose (NaN during search).
+    /// The loss at the current pose (NaN during the search).
     pub loss: f64,
-    /// Hard IoU per view at the current pose, at the current stage's resolution.
+    /// Hard IoU per view at the current pose, at the current stage's resolution
+    /// (filled by [`Estimator::progress`], empty after [`Estimator::step`]).
     pub view_iou: Vec<f64>,
     /// The current pose.
     #[serde(skip)]
     pub pose: Pose,
     /// Why the fit stopped, once done.
     pub termination: Option<Termination>,
+    /// The verdict, once done.
+    pub verdict: Option<Verdict>,
 }
 
 /// One candidate being refined.
@@ -165,91 +205,117 @@ impl Track {
             converged: false,
         }
     }
+
+    /// Appends a loss to the history and keeps the best pose.
+    fn record(&mut self, loss: f64) {
+        self.history.push(loss);
+        if loss < self.best_loss {
+            self.best_loss = loss;
+            self.best_pose = self.pose;
+            self.since_best = 0;
+        } else {
+            self.since_best += 1;
+        }
+    }
 }
+
+/// A view's figures at full resolution.
+#[derive(Debug, Clone)]
+pub struct ViewFigures {
+    /// Hard IoU over the known pixels.
+    pub iou: f64,
+    /// Hausdorff distance between the rendered and the mask's contours, pixels.
+    pub hausdorff_px: f64,
+    /// The rendered silhouette.
+    pub rendered: Mask,
+}
+
+/// The final figures, computed once when the fit ends.
+#[derive(Debug, Clone)]
+struct Final {
+    pose: Pose,
+    views: Vec<ViewFigures>,
+    judgement: Judgement,
+}
+
+/// Search candidates scored per step.
+const SEARCH_BATCH: usize = 16;
+/// A candidate whose best loss has not improved for this many iterations is done.
+const PATIENCE: usize = 25;
 
 /// The step-wise pose estimator.
 pub struct Estimator {
     mesh: Mesh,
     views: Vec<View>,
+    windows: Vec<Window>,
     settings: FitSettings,
     centre: DVec3,
     radius: f64,
     phase: Phase,
-    // Search state.
+    /// The mesh the search and the stages at or below its resolution render.
     search_mesh: Mesh,
+    // Search state.
     rotations: Vec<DMat3>,
     next_rotation: usize,
     start: Pose,
-    low: Vec<LowResView>,
+    search: Option<Objective>,
     scored: Vec<Candidate>,
+    bits: BitMask,
     // Refinement state.
     tracks: Vec<Track>,
     stage: usize,
     current: usize,
     iter_in_stage: usize,
-    target: Option<RefineTarget>,
+    objective: Option<Objective>,
     iterations: usize,
     last_loss: f64,
     termination: Option<Termination>,
+    done: Option<Final>,
 }
-
-/// Appends a loss to a track's history and keeps its best pose.
-fn record(t: &mut Track, loss: f64) {
-    t.history.push(loss);
-    if loss < t.best_loss {
-        t.best_loss = loss;
-        t.best_pose = t.pose;
-        t.since_best = 0;
-    } else {
-        t.since_best += 1;
-    }
-}
-
-/// Search candidates scored per step.
-const SEARCH_BATCH: usize = 16;
 
 impl Estimator {
     /// Sets up a fit of `mesh` to `views`. With `initial_pose`, the search is skipped.
+    ///
+    /// Errors: invalid settings or mesh, no views, or an object whose centre is
+    /// behind a camera at the initial pose.
     pub fn new(mesh: Mesh, views: Vec<View>, initial_pose: Option<Pose>, settings: FitSettings) -> Result<Estimator> {
         settings.validate()?;
         if views.is_empty() {
             return Err(Error::Settings("at least one view is needed".into()));
         }
         mesh.validate("mesh")?;
-        for v in &views {
-            crate::io::scene::check_mask(&v.name, "mask", &v.mask, v.camera.width, v.camera.height)?;
-        }
         let b = mesh.bounds().ok_or_else(|| Error::Mesh {
             file: "mesh".into(),
             problem: "has no vertices".into(),
         })?;
-        let centre = b.centre();
-        let radius = (b.size().length() * 0.5).max(1e-12);
+        let windows = views.iter().map(|v| Window::for_view(v, settings.window)).collect();
+        // Cells of about two pixels at the search resolution: silhouettes within a pixel.
+        let search_mesh = mesh.clustered(settings.search.resolution * 3 / 8);
         let mut est = Estimator {
-            low: Vec::new(),
-            search_mesh: Mesh::default(),
+            centre: b.centre(),
+            radius: (b.size().length() * 0.5).max(1e-12),
+            search_mesh,
+            mesh,
+            views,
+            windows,
+            phase: Phase::Search,
             rotations: Vec::new(),
             next_rotation: 0,
             start: Pose::IDENTITY,
+            search: None,
             scored: Vec::new(),
+            bits: BitMask::empty(0, 0),
             tracks: Vec::new(),
             stage: 0,
             current: 0,
             iter_in_stage: 0,
-            target: None,
+            objective: None,
             iterations: 0,
             last_loss: f64::NAN,
             termination: None,
-            phase: Phase::Search,
-            mesh,
-            views,
+            done: None,
             settings,
-            centre,
-            radius,
         };
-        // Cells of about two pixels at the search resolution: silhouettes within a pixel.
-        // The search and the refinement stages at that resolution or below use it.
-        est.search_mesh = est.mesh.clustered(est.settings.search.resolution * 3 / 8);
         match initial_pose {
             Some(p) => {
                 p.validate()?;
@@ -259,7 +325,16 @@ impl Estimator {
             None => {
                 est.start = est.initial_guess()?;
                 est.rotations = est.settings.search.sampling.rotations();
-                est.low = search::low_res_views(&est.views, est.settings.search.resolution);
+                let mut s = est.settings.clone();
+                // The search only needs the targets' masks: no contour fields.
+                s.lambda_contour = 0.0;
+                s.lambda_iou = 1.0;
+                est.search = Some(Objective::new(
+                    &est.views,
+                    &est.windows,
+                    s.search.resolution,
+                    s.objective(&s.stages[0]),
+                )?);
             }
         }
         Ok(est)
@@ -273,6 +348,11 @@ impl Estimator {
     /// The views being fitted.
     pub fn views(&self) -> &[View] {
         &self.views
+    }
+
+    /// Each view's window.
+    pub fn windows(&self) -> &[Window] {
+        &self.windows
     }
 
     /// The settings in use.
@@ -290,11 +370,14 @@ impl Estimator {
         self.phase == Phase::Done
     }
 
-    /// Centre and isotropic scale from the masks (SPEC §4 step 2), identity rotation.
+    /// The starting scale: 1 (the CAD model is to scale) or from the masks' areas.
     fn initial_guess(&self) -> Result<Pose> {
         let mean_area = (init::surface_area(&self.mesh) / 4.0).max(1e-300);
         // One view: the depth at which a unit-scale object covers the mask's area.
-        let depth = |v: &View| (v.camera.fx * v.camera.fy * mean_area / v.mask.area().max(1) as f64).sqrt();
+        let depth = |v: &View| {
+            let c = v.camera();
+            (c.fx * c.fy * mean_area / v.known_area().max(1) as f64).sqrt()
+        };
         let x = init::triangulate_centre(&self.views, depth)?;
         let s = match self.settings.scale_mode {
             ScaleMode::Fixed => 1.0,
@@ -314,9 +397,9 @@ impl Estimator {
     fn check_in_front(&self, pose: &Pose) -> Result<()> {
         let c = pose.apply(self.centre);
         for v in &self.views {
-            if v.camera.to_camera(c).z <= 0.0 {
+            if v.camera().to_camera(c).z <= 0.0 {
                 return Err(Error::View {
-                    view: v.name.clone(),
+                    view: v.name().to_string(),
                     problem: "the object's centre is behind this camera (check the camera's extrinsics and convention)"
                         .into(),
                 });
@@ -331,39 +414,45 @@ impl Estimator {
         self.stage = 0;
         self.current = 0;
         self.iter_in_stage = 0;
-        self.target = Some(self.make_target(0));
+        self.search = None;
+        self.objective = Some(self.make_objective(0)?);
         Ok(())
     }
 
-    fn make_target(&self, stage: usize) -> RefineTarget {
+    fn make_objective(&self, stage: usize) -> Result<Objective> {
         let s = &self.settings.stages[stage];
-        RefineTarget::new(&self.views, s, self.settings.lambda_iou, self.settings.lambda_contour)
+        Objective::new(&self.views, &self.windows, s.resolution, self.settings.objective(s))
     }
 
     /// Does one unit of work and reports where the fit stands. To keep a step cheap,
     /// its `view_iou` is left empty: [`Estimator::progress`] fills it.
-    pub fn step(&mut self) -> Progress {
+    ///
+    /// Errors: none on validated inputs; an internal failure (a bug) is reported
+    /// rather than hidden, and the estimator then stays where it was.
+    pub fn step(&mut self) -> Result<Progress> {
         match self.phase {
-            Phase::Search => self.search_step(),
-            Phase::Refine => self.refine_step(),
+            Phase::Search => self.search_step()?,
+            Phase::Refine => self.refine_step()?,
             Phase::Done => {}
         }
-        self.snapshot(Vec::new())
+        Ok(self.snapshot(Vec::new()))
     }
 
     /// Steps until done (at most `max_steps`); returns the last progress.
-    pub fn run(&mut self, max_steps: usize) -> Progress {
+    pub fn run(&mut self, max_steps: usize) -> Result<Progress> {
         for _ in 0..max_steps {
             if self.is_done() {
                 break;
             }
-            self.step();
+            self.step()?;
         }
-        self.progress()
+        Ok(self.progress())
     }
 
-    fn search_step(&mut self) {
+    fn search_step(&mut self) -> Result<()> {
         let end = (self.next_rotation + SEARCH_BATCH).min(self.rotations.len());
+        let targets = self.search.as_ref().map(|o| o.targets()).unwrap_or_default();
+        let refit_scale = self.settings.scale_mode != ScaleMode::Fixed;
         for i in self.next_rotation..end {
             let r = self.rotations[i];
             let s = self.start.scale;
@@ -375,10 +464,12 @@ impl Estimator {
             };
             let cand = search::score_candidate(
                 &self.search_mesh,
-                &self.low,
+                targets,
                 pose,
                 self.centre,
                 self.settings.search.refit_rounds,
+                refit_scale,
+                &mut self.bits,
             );
             self.scored.push(cand);
         }
@@ -391,18 +482,18 @@ impl Estimator {
             );
             let poses: Vec<Pose> = best.iter().map(|c| c.pose).collect();
             let poses = if poses.is_empty() { vec![self.start] } else { poses };
-            // begin_refine cannot fail here: the poses came from valid cameras and masks.
-            let _ = self.begin_refine(poses);
+            self.begin_refine(poses)?;
         }
+        Ok(())
     }
 
-    fn refine_step(&mut self) {
+    fn refine_step(&mut self) -> Result<()> {
         let stage = self.settings.stages[self.stage].clone();
         let last_stage = self.stage + 1 == self.settings.stages.len();
-        let target = self
-            .target
+        let objective = self
+            .objective
             .as_mut()
-            .expect("a refinement target exists in the refine phase");
+            .ok_or_else(|| Error::Settings("internal: no objective in the refine phase".into()))?;
         let mesh = if stage.resolution <= self.settings.search.resolution {
             &self.search_mesh
         } else {
@@ -410,26 +501,25 @@ impl Estimator {
         };
         let t = &mut self.tracks[self.current];
         let length = self.radius * t.pose.scale.max_element();
-        let loss = match stage.optimiser {
+        let loss = match self.settings.optimiser {
             Optimiser::Adam => {
-                let (loss, grad) = target.loss_and_gradient(mesh, &t.pose);
+                let ev = objective.value_and_gradient(mesh, &t.pose)?;
                 let frac = self.iter_in_stage as f64 / stage.iterations.max(1) as f64;
                 let lr = stage.lr_start * (stage.lr_end / stage.lr_start).powf(frac);
-                let mut g = params::scale_gradient(&grad, length);
+                let mut g = params::scale_gradient(&ev.gradient, length);
                 match self.settings.scale_mode {
                     ScaleMode::Fixed => g[6..9].iter_mut().for_each(|v| *v = 0.0),
                     ScaleMode::Isotropic => params::isotropic_scale(&mut g),
                     ScaleMode::Anisotropic => {}
                 }
                 let d = t.adam.update(&g, &self.settings.adam, lr);
-                record(t, loss);
+                t.record(ev.total);
                 t.pose = params::apply(&t.pose, &d, length);
-                loss
+                ev.total
             }
             Optimiser::LevenbergMarquardt => {
-                let ne = target.normal_equations(mesh, &t.pose);
-                let loss = 2.0 * ne.cost;
-                record(t, loss);
+                let (ev, ne) = objective.normal_equations(mesh, &t.pose)?;
+                t.record(ev.total);
                 let free = match self.settings.scale_mode {
                     ScaleMode::Fixed => Free::NoScale,
                     ScaleMode::Isotropic => Free::IsotropicScale,
@@ -437,7 +527,7 @@ impl Estimator {
                 };
                 let scaled = lm::scale_equations(&ne, length);
                 t.pose = t.lm.next_pose(t.pose, scaled, free, |p, d| params::apply(p, d, length));
-                loss
+                ev.total
             }
         };
         self.iterations += 1;
@@ -457,38 +547,40 @@ impl Estimator {
                 t.done_in_stage = true;
             }
         }
-        if t.since_best >= 25 {
-            t.done_in_stage = true;
-        }
-        if self.iter_in_stage >= stage.iterations {
+        if t.since_best >= PATIENCE || self.iter_in_stage >= stage.iterations {
             t.done_in_stage = true;
         }
         if t.done_in_stage {
-            self.next_track();
+            self.next_track()?;
         }
+        Ok(())
     }
 
-    fn next_track(&mut self) {
+    fn next_track(&mut self) -> Result<()> {
         self.iter_in_stage = 0;
         if self.current + 1 < self.tracks.len() {
             self.current += 1;
-            return;
+            return Ok(());
         }
         // Stage finished for every track: keep the best ones, on to the next stage.
-        let target = self.target.as_ref().expect("target exists");
+        let objective = self
+            .objective
+            .as_mut()
+            .ok_or_else(|| Error::Settings("internal: no objective in the refine phase".into()))?;
         let mut scored: Vec<(f64, Track)> = std::mem::take(&mut self.tracks)
             .into_iter()
             .map(|mut t| {
                 t.pose = t.best_pose;
-                (target.hard_score(&self.mesh, &t.pose), t)
+                let ious = objective.hard_ious(&self.mesh, &t.pose);
+                (ious.iter().sum::<f64>() / ious.len().max(1) as f64, t)
             })
             .collect();
         scored.sort_by(|a, b| b.0.total_cmp(&a.0));
         let keep = self.settings.stages[self.stage].keep;
         self.tracks = scored.into_iter().take(keep).map(|(_, t)| t).collect();
+        self.current = 0;
         if self.stage + 1 < self.settings.stages.len() {
             self.stage += 1;
-            self.current = 0;
             for t in &mut self.tracks {
                 t.adam = Adam::new();
                 t.lm = Lm::new();
@@ -496,19 +588,31 @@ impl Estimator {
                 t.since_best = 0;
                 t.done_in_stage = false;
             }
-            self.target = Some(self.make_target(self.stage));
+            self.objective = Some(self.make_objective(self.stage)?);
         } else {
-            let t = &self.tracks[0];
-            self.termination = Some(if t.converged {
-                Termination::Converged
-            } else if t.since_best >= 25 {
-                Termination::Stalled
-            } else {
-                Termination::MaxIterations
-            });
-            self.current = 0;
-            self.phase = Phase::Done;
+            self.finish();
         }
+        Ok(())
+    }
+
+    /// Ends the fit: final figures at full resolution, the verdict, the termination.
+    fn finish(&mut self) {
+        let t = &self.tracks[0];
+        let pose = t.best_pose;
+        let views: Vec<ViewFigures> = self.views.iter().map(|v| full_figures(&self.mesh, &pose, v)).collect();
+        let names: Vec<&str> = self.views.iter().map(|v| v.name()).collect();
+        let ious: Vec<f64> = views.iter().map(|f| f.iou).collect();
+        let judgement = verdict::judge(&names, &ious, &[], &self.settings.verdict);
+        self.termination = Some(if t.converged && judgement.verdict != Verdict::Failed {
+            Termination::Converged
+        } else if t.converged || t.since_best >= PATIENCE {
+            Termination::Stalled
+        } else {
+            Termination::MaxIterations
+        });
+        self.done = Some(Final { pose, views, judgement });
+        self.objective = None;
+        self.phase = Phase::Done;
     }
 
     /// The pose the fit currently holds (the best so far once done).
@@ -525,25 +629,32 @@ impl Estimator {
     }
 
     /// A snapshot of the state, with the hard IoU of every view at the current
-    /// stage's resolution (the search's 64 px during the search).
+    /// stage's resolution (the search's during the search; full resolution once done).
     pub fn progress(&self) -> Progress {
         let pose = self.pose();
-        let view_iou = match (&self.phase, &self.target) {
-            (Phase::Search, _) | (_, None) => self
-                .low
+        let view_iou = if let Some(f) = &self.done {
+            f.views.iter().map(|v| v.iou).collect()
+        } else {
+            let (objective, mesh) = match (&self.search, &self.objective) {
+                (Some(s), _) => (s, &self.search_mesh),
+                (None, Some(o)) => (o, &self.mesh),
+                (None, None) => return self.snapshot(Vec::new()),
+            };
+            let mut bits = BitMask::empty(0, 0);
+            objective
+                .targets()
                 .iter()
-                .map(|v| {
-                    let proj = crate::raster::project::project_mesh(&self.search_mesh, &pose, &v.camera);
-                    hard::render_bits(&proj, &self.search_mesh.triangles, &v.camera).iou(&v.bits)
+                .map(|t| {
+                    let proj = crate::raster::project::project_mesh(mesh, &pose, &t.camera);
+                    hard::render_bits_into(&proj, &mesh.triangles, &t.camera, &mut bits);
+                    t.hard_iou(&bits)
                 })
-                .collect(),
-            (_, Some(t)) => t.hard_ious(&self.mesh, &pose),
+                .collect()
         };
         self.snapshot(view_iou)
     }
 
     fn snapshot(&self, view_iou: Vec<f64>) -> Progress {
-        let pose = self.pose();
         Progress {
             phase: self.phase,
             iteration: self.iterations,
@@ -553,8 +664,9 @@ impl Estimator {
             candidate: self.current,
             loss: self.last_loss,
             view_iou,
-            pose,
+            pose: self.pose(),
             termination: self.termination,
+            verdict: self.done.as_ref().map(|f| f.judgement.verdict),
         }
     }
 
@@ -567,14 +679,26 @@ impl Estimator {
             .unwrap_or_default()
     }
 
-    /// Per-view figures at full resolution for a pose: (hard IoU, Hausdorff px, rendered mask).
-    pub fn view_figures(&self, pose: &Pose) -> Vec<(f64, f64, Mask)> {
-        self.views
-            .iter()
-            .map(|v| {
-                let m = hard::render(&self.mesh, pose, &v.camera);
-                (metrics::hard_iou(&m, &v.mask), metrics::hausdorff_px(&m, &v.mask), m)
-            })
-            .collect()
+    /// The verdict and the views it doubts, once done.
+    pub fn judgement(&self) -> Option<&Judgement> {
+        self.done.as_ref().map(|f| &f.judgement)
+    }
+
+    /// Per-view figures at full resolution for a pose (cached for the final pose).
+    pub fn view_figures(&self, pose: &Pose) -> Vec<ViewFigures> {
+        match &self.done {
+            Some(f) if f.pose == *pose => f.views.clone(),
+            _ => self.views.iter().map(|v| full_figures(&self.mesh, pose, v)).collect(),
+        }
+    }
+}
+
+/// A view's figures at full resolution (IoU over the known pixels).
+fn full_figures(mesh: &Mesh, pose: &Pose, view: &View) -> ViewFigures {
+    let rendered = hard::render(mesh, pose, view.camera());
+    ViewFigures {
+        iou: metrics::hard_iou_known(&rendered, view.mask(), view.ignore()),
+        hausdorff_px: metrics::hausdorff_px(&rendered, view.mask()),
+        rendered,
     }
 }

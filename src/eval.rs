@@ -6,8 +6,9 @@
 //!
 //! What counts (stated in the report too): every view of every scene holds one
 //! ground-truth object (its mask). The fit makes one prediction per view — the
-//! estimated pose's hard silhouette — unless that silhouette is empty (the object
-//! left the view), which is a missed detection. A prediction is a true positive at
+//! estimated pose's hard silhouette — unless the fit's verdict is `failed` (the
+//! estimator itself rejects the pose) or that silhouette is empty (the object left
+//! the view): those are missed detections, so precision and recall differ. A prediction is a true positive at
 //! threshold τ when its IoU with the mask exceeds τ. Precision = TP / predictions,
 //! recall = TP / ground-truth objects, F1 = 2PR / (P + R).
 
@@ -112,7 +113,8 @@ pub fn prf(outcomes: &[SceneOutcome], threshold: f64) -> PrfRow {
     for o in outcomes {
         for (i, v) in o.result.views.iter().enumerate() {
             gt += 1;
-            if o.predicted_area.get(i).copied().unwrap_or(0) > 0 {
+            let failed = o.result.verdict == Some(crate::verdict::Verdict::Failed);
+            if !failed && o.predicted_area.get(i).copied().unwrap_or(0) > 0 {
                 pred += 1;
                 if v.iou > threshold {
                     tp += 1;
@@ -195,7 +197,8 @@ pub fn report_markdown(summary: &Summary, outcomes: &[SceneOutcome]) -> String {
     s += &format!("# LocaliseBot evaluation: {} scenes\n\n", summary.scenes);
     s += "## Silhouette detection (the paper's Table 1)\n\n";
     s += "Every view of every scene holds one ground-truth object (its mask). The fit predicts one silhouette per \
-          view (the estimated pose's hard render); an empty render is no prediction. A prediction is a true \
+          view (the estimated pose's hard render); an empty render, or any view of a fit whose verdict is \
+          `failed`, is no prediction. A prediction is a true \
           positive at threshold τ when its IoU with the mask is greater than τ. Precision = TP / predictions, \
           recall = TP / ground-truth objects.\n\n";
     s += "| IoU > | TP | predictions | objects | precision | recall | F1 |\n|---|---|---|---|---|---|---|\n";
@@ -255,91 +258,13 @@ pub fn report_markdown(summary: &Summary, outcomes: &[SceneOutcome]) -> String {
     s
 }
 
-/// The rotations of the cube group (the 24 signed permutation matrices of
-/// determinant +1) that map the mesh onto itself about its bounding box's centre:
-/// every rotated vertex lies within 2 % of the diameter of a vertex. Always holds the
-/// identity; more than one element means the object is symmetric, and a pose is then
-/// only determined up to these rotations (ADD-S is the fair measure).
-pub fn symmetries(mesh: &crate::mesh::Mesh) -> Vec<glam::DMat3> {
-    use glam::{DMat3, DVec3};
-    use kiddo::{KdTree, SquaredEuclidean};
-    let mut out = vec![DMat3::IDENTITY];
-    let Some(b) = mesh.bounds() else { return out };
-    let pts = mesh.used_points();
-    if pts.len() < 3 {
-        return out;
-    }
-    let c = b.centre();
-    let tol = 0.02 * b.size().length();
-    let mut tree: KdTree<f64, 3> = KdTree::new();
-    for (i, p) in pts.iter().enumerate() {
-        tree.add(&(*p - c).to_array(), i as u64);
-    }
-    let axes = [DVec3::X, DVec3::Y, DVec3::Z];
-    for perm in [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]] {
-        for signs in 0..8u32 {
-            let sign = |k: u32| if signs >> k & 1 == 1 { -1.0 } else { 1.0 };
-            let m = DMat3::from_cols(
-                axes[perm[0]] * sign(0),
-                axes[perm[1]] * sign(1),
-                axes[perm[2]] * sign(2),
-            );
-            if (m.determinant() - 1.0).abs() > 1e-9 || m == DMat3::IDENTITY {
-                continue;
-            }
-            let maps = pts.iter().all(|p| {
-                let q = m * (*p - c);
-                tree.nearest_one::<SquaredEuclidean>(&q.to_array()).distance <= tol * tol
-            });
-            if maps {
-                out.push(m);
-            }
-        }
-    }
-    out
-}
-
-/// Whether the object has a symmetry of the cube group (see [`symmetries`]).
-pub fn is_symmetric(mesh: &crate::mesh::Mesh) -> bool {
-    symmetries(mesh).len() > 1
-}
-
-/// The pose `gt ∘ S` (first the model symmetry S about the mesh's box centre `c`,
-/// then `gt`): the same physical object as `gt`. S is a signed permutation, so
-/// `diag(s)·S = S·diag(|Sᵀs|)` and the result is again rotation, translation and
-/// per-axis scale.
-pub fn compose_symmetry(gt: &crate::Pose, s: glam::DMat3, c: glam::DVec3) -> crate::Pose {
-    let scale = (s.transpose() * gt.scale).abs();
-    let rotation = gt.rotation * s;
-    // gt(S(X − c) + c) = R·(s_gt ⊙ (S X)) + R·(s_gt ⊙ (c − S c)) + t.
-    let translation = gt.translation + gt.rotation * (gt.scale * (c - s * c));
-    crate::Pose {
-        rotation,
-        translation,
-        scale,
-    }
-}
-
-/// Among the symmetric equivalents of `gt`, the one closest to `est` (by ADD).
-pub fn closest_equivalent(
-    mesh: &crate::mesh::Mesh,
-    syms: &[glam::DMat3],
-    est: &crate::Pose,
-    gt: &crate::Pose,
-) -> crate::Pose {
-    let c = mesh.bounds().map_or(glam::DVec3::ZERO, |b| b.centre());
-    syms.iter()
-        .map(|s| compose_symmetry(gt, *s, c))
-        .min_by(|a, b| crate::metrics::add(mesh, est, a).total_cmp(&crate::metrics::add(mesh, est, b)))
-        .unwrap_or(*gt)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::estimator::Termination;
     use crate::metrics::PoseErrors;
     use crate::result::{PoseOut, ViewResult};
+    use crate::verdict::Verdict;
 
     fn outcome(ious: &[f64], areas: &[usize], add_rel: f64) -> SceneOutcome {
         let errors = PoseErrors {
@@ -372,8 +297,12 @@ mod tests {
                 loss_history: vec![],
                 iterations: 1,
                 termination: Some(Termination::Converged),
+                verdict: Some(Verdict::Ok),
+                verdict_reasons: vec![],
+                doubted_views: vec![],
                 seconds: 1.0,
                 errors: Some(errors),
+                symmetric: Some(false),
             },
             predicted_area: areas.to_vec(),
             grasps_correct: 1,
@@ -402,30 +331,12 @@ mod tests {
         assert_eq!(s.loss_by_views[0], (1, 0.3, 2));
         let md = report_markdown(&s, &o);
         assert!(md.contains("| 0.25 | 2 | 3 | 4 | 0.667 | 0.500 |"), "{md}");
-    }
-
-    #[test]
-    fn symmetry_of_box_and_blob() {
-        let bytes = include_bytes!("../tests/fixtures/gltf/Box/glTF-Binary/Box.glb");
-        let cube = crate::io::load_mesh("Box.glb", bytes, &crate::io::no_files).unwrap();
-        assert!(is_symmetric(&cube));
-        assert_eq!(symmetries(&cube).len(), 24, "a cube has the whole group");
-        assert!(!is_symmetric(&crate::synth::blob_mesh(12, 25)));
-        // An equivalent pose is the same physical object: ADD between them is ~0,
-        // for an anisotropic scale too.
-        let gt = crate::Pose {
-            rotation: crate::so3::exp(glam::DVec3::new(0.3, -0.2, 0.5)),
-            translation: glam::DVec3::new(0.1, 0.2, 0.3),
-            scale: glam::DVec3::new(1.0, 1.0, 1.0),
-        };
-        let box_mesh = cube.clone();
-        for s in symmetries(&box_mesh) {
-            let e = compose_symmetry(&gt, s, box_mesh.bounds().unwrap().centre());
-            assert!(crate::metrics::add_s(&box_mesh, &e, &gt) < 1e-9);
-        }
-        let flipped = compose_symmetry(&gt, symmetries(&box_mesh)[5], glam::DVec3::ZERO);
-        assert!(crate::metrics::add(&box_mesh, &flipped, &gt) > 0.1);
-        let back = closest_equivalent(&box_mesh, &symmetries(&box_mesh), &flipped, &gt);
-        assert!(crate::metrics::add(&box_mesh, &flipped, &back) < 1e-9);
+        // A failed fit predicts nothing: its views leave precision alone and lower recall.
+        let mut failed = outcome(&[0.1, 0.05], &[80, 90], 0.9);
+        failed.result.verdict = Some(Verdict::Failed);
+        let o2 = vec![o[0].clone(), o[1].clone(), failed];
+        let r2 = summarise(&o2).prf[0].clone();
+        assert_eq!((r2.tp, r2.predictions, r2.ground_truths), (2, 3, 6));
+        assert!(r2.precision > r2.recall);
     }
 }

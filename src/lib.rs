@@ -32,10 +32,11 @@ pub mod optim;
 pub mod overlay;
 pub mod pose;
 pub mod raster;
-pub mod refine;
 pub mod result;
 pub mod so3;
+pub mod symmetry;
 pub mod synth;
+pub mod verdict;
 pub mod view;
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;

@@ -34,6 +34,34 @@ impl Bounds {
 }
 
 impl Mesh {
+    /// A closed axis-aligned box of side lengths `size`, centred on the origin
+    /// (8 vertices, 12 triangles, counter-clockwise seen from outside).
+    pub fn cuboid(size: DVec3) -> Mesh {
+        let h = size * 0.5;
+        let positions = (0..8)
+            .map(|i| {
+                DVec3::new(
+                    if i & 1 == 0 { -h.x } else { h.x },
+                    if i & 2 == 0 { -h.y } else { h.y },
+                    if i & 4 == 0 { -h.z } else { h.z },
+                )
+            })
+            .collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        Mesh { positions, triangles }
+    }
+
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()

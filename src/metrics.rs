@@ -146,6 +146,31 @@ pub fn hard_iou(a: &Mask, b: &Mask) -> f64 {
     }
 }
 
+/// Hard IoU of `a` (a render) against `b` (a mask) counting only the pixels not set
+/// in `ignore` (SPEC §2: ignored pixels count in no IoU); [`hard_iou`] without one.
+///
+/// # Panics
+/// If the sizes differ.
+pub fn hard_iou_known(a: &Mask, b: &Mask, ignore: Option<&Mask>) -> f64 {
+    let Some(ig) = ignore else { return hard_iou(a, b) };
+    assert_same_size(a, b);
+    assert_same_size(a, ig);
+    let (mut inter, mut union) = (0usize, 0usize);
+    for ((&x, &y), &i) in a.data.iter().zip(&b.data).zip(&ig.data) {
+        if i != 0 {
+            continue;
+        }
+        let (x, y) = (x != 0, y != 0);
+        inter += (x && y) as usize;
+        union += (x || y) as usize;
+    }
+    if union == 0 {
+        0.0
+    } else {
+        inter as f64 / union as f64
+    }
+}
+
 /// The contour of a mask: its object pixels with a 4-neighbour that is background
 /// or outside the image.
 pub fn contour(mask: &Mask) -> Mask {

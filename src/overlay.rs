@@ -47,8 +47,9 @@ pub fn overlay(view: &View, rendered: Option<&Mask>) -> Rgba {
 /// As [`overlay`] in the given style. A rendered mask of another size than the view
 /// is stretched onto it (nearest pixel).
 pub fn overlay_with(view: &View, rendered: Option<&Mask>, style: &OverlayStyle) -> Rgba {
-    let (w, h) = (view.mask.width, view.mask.height);
-    let mut img = match &view.image {
+    let mask = view.mask();
+    let (w, h) = (mask.width, mask.height);
+    let mut img = match view.image() {
         Some(i) if (i.width, i.height) == (w, h) => {
             let mut i = i.clone();
             i.data.chunks_exact_mut(4).for_each(|p| p[3] = 255);
@@ -57,8 +58,7 @@ pub fn overlay_with(view: &View, rendered: Option<&Mask>, style: &OverlayStyle) 
         _ => Rgba {
             width: w,
             height: h,
-            data: view
-                .mask
+            data: mask
                 .data
                 .iter()
                 .flat_map(|&v| {
@@ -72,7 +72,7 @@ pub fn overlay_with(view: &View, rendered: Option<&Mask>, style: &OverlayStyle) 
         .line_width
         .unwrap_or(if w.max(h) >= 512 { 2 } else { 1 })
         .clamp(1, 2);
-    draw_contour(&mut img, &view.mask, style.mask_colour, width);
+    draw_contour(&mut img, mask, style.mask_colour, width);
     if let Some(r) = rendered {
         if (r.width, r.height) == (w, h) {
             draw_contour(&mut img, r, style.render_colour, width);
@@ -213,19 +213,15 @@ mod tests {
     }
 
     fn view(mask: Mask, image: Option<Rgba>) -> View {
-        View {
-            name: "v".into(),
-            camera: Camera::look_at(
-                glam::DVec3::Z,
-                glam::DVec3::ZERO,
-                glam::DVec3::Y,
-                mask.width,
-                mask.height,
-                10.0,
-            ),
-            mask,
-            image,
-        }
+        let camera = Camera::look_at(
+            glam::DVec3::Z,
+            glam::DVec3::ZERO,
+            glam::DVec3::Y,
+            mask.width,
+            mask.height,
+            10.0,
+        );
+        View::new("v", camera, mask, None, image, &Default::default()).unwrap()
     }
 
     fn px(img: &Rgba, x: u32, y: u32) -> [u8; 4] {

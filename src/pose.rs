@@ -158,12 +158,22 @@ impl PoseJson {
         }
     }
 
-    /// Converts and validates.
+    /// Converts and validates (a rotation slightly off SO(3) is projected onto it;
+    /// see [`PoseJson::to_pose_with_warning`]).
     pub fn to_pose(&self) -> Result<Pose> {
-        let rot = match (&self.rotation, &self.quaternion) {
-            (Some(RotationJson::Matrix(m)), _) => mat3_from_rows(*m),
+        self.to_pose_with_warning().map(|(p, _)| p)
+    }
+
+    /// Converts and validates; also returns the rotation's deviation from SO(3)
+    /// (max |RᵀR − I|, |det − 1|) when it was more than rounding and the rotation was
+    /// projected onto the nearest one (at most [`so3::SO3_TOLERANCE`] is accepted).
+    pub fn to_pose_with_warning(&self) -> Result<(Pose, Option<f64>)> {
+        let (rot, deviation) = match (&self.rotation, &self.quaternion) {
+            (Some(RotationJson::Matrix(m)), _) => {
+                so3::accept_rotation(mat3_from_rows(*m)).map_err(|why| Error::Pose(format!("rotation {why}")))?
+            }
             (Some(RotationJson::Quaternion(q)), _) | (None, Some(q)) => quat_wxyz(*q)?,
-            (None, None) => DMat3::IDENTITY,
+            (None, None) => (DMat3::IDENTITY, 0.0),
         };
         let pose = Pose {
             rotation: rot,
@@ -171,20 +181,20 @@ impl PoseJson {
             scale: DVec3::from_array(self.scale),
         };
         pose.validate()?;
-        Ok(pose)
+        Ok((pose, (deviation > so3::SO3_SILENT).then_some(deviation)))
     }
 }
 
-fn quat_wxyz(q: [f64; 4]) -> Result<DMat3> {
+fn quat_wxyz(q: [f64; 4]) -> Result<(DMat3, f64)> {
     let q = DQuat::from_xyzw(q[1], q[2], q[3], q[0]);
     if !q.is_finite() {
         return Err(Error::Pose("quaternion contains a non-finite number".into()));
     }
     let n = q.length();
-    if (n - 1.0).abs() > 1e-3 {
+    if (n - 1.0).abs() > so3::SO3_TOLERANCE {
         return Err(Error::Pose(format!("quaternion is not unit length (|q| = {n:.4})")));
     }
-    Ok(DMat3::from_quat(q / n))
+    Ok((DMat3::from_quat(q / n), (n - 1.0).abs()))
 }
 
 #[cfg(test)]
@@ -234,6 +244,14 @@ mod tests {
         );
         assert!(e.unwrap_err().to_string().contains("not orthonormal"));
         let e = Pose::from_json_str(r#"{"rotation":[1,0,0,0],"translation":[0,NaN,0]}"#, "c.json");
+        assert!(e.unwrap_err().to_string().starts_with("c.json"));
+        // Rounded annotations are projected, with the deviation reported.
+        let pj: PoseJson =
+            serde_json::from_str(r#"{"rotation":[[1,0.008,0],[0,1,0],[0,0,1]],"translation":[0,0,0]}"#).unwrap();
+        let (p, dev) = pj.to_pose_with_warning().unwrap();
+        assert!((dev.unwrap() - 0.008).abs() < 1e-3);
+        assert!(so3::orthonormality_error(p.rotation) < 1e-12);
+        let e = Pose::from_json_str(r#"{"rotation":[0,0,0,0],"translation":[0,0,0]}"#, "c.json");
         assert!(e.unwrap_err().to_string().starts_with("c.json"));
     }
 }

@@ -1,12 +1,16 @@
 //! The result of a fit (SPEC §3): the pose in its wire form plus the quaternion and
 //! the 4×4 object-to-world matrix, per-view figures, the loss history, the time
-//! taken (measured by the caller: the core has no clock) and, given a ground truth,
-//! the error figures of SPEC §6.
+//! taken (measured by the caller: the core has no clock), the verdict with the views
+//! it doubts and, given a ground truth, the error figures of SPEC §6 — measured
+//! against the symmetric equivalent of the truth closest to the estimate, so that
+//! the command line, the page and `eval` report the same figures.
 
 use crate::estimator::{Estimator, Termination};
 use crate::metrics::{pose_errors, PoseErrors};
 use crate::pose::{mat3_to_rows, mat4_to_rows, Pose};
 use crate::so3;
+use crate::symmetry;
+use crate::verdict::Verdict;
 use serde::{Deserialize, Serialize};
 
 /// A pose with every form a reader may want.
@@ -43,7 +47,7 @@ impl PoseOut {
 pub struct ViewResult {
     /// The view's name.
     pub name: String,
-    /// Hard silhouette IoU against the mask, full resolution.
+    /// Hard silhouette IoU against the mask, full resolution, over the known pixels.
     pub iou: f64,
     /// Hausdorff distance between the rendered and the mask's contours, pixels.
     pub hausdorff_px: f64,
@@ -66,16 +70,30 @@ pub struct FitResult {
     pub iterations: usize,
     /// Why the fit stopped.
     pub termination: Option<Termination>,
+    /// `ok`, `poor` or `failed` (see [`crate::verdict`]); absent before the fit ends.
+    #[serde(default)]
+    pub verdict: Option<Verdict>,
+    /// Why the verdict is not `ok`, one line each.
+    #[serde(default)]
+    pub verdict_reasons: Vec<String>,
+    /// Views the verdict doubts.
+    #[serde(default)]
+    pub doubted_views: Vec<String>,
     /// Wall-clock seconds, as measured by the caller.
     pub seconds: f64,
-    /// Error figures against the scene's ground truth, when it has one.
+    /// Error figures against the scene's ground truth, when it has one (against its
+    /// symmetric equivalent closest to the estimate, for a symmetric object).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub errors: Option<PoseErrors>,
+    /// Whether the object was found symmetric (errors then allow for it), when a
+    /// ground truth was given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub symmetric: Option<bool>,
 }
 
 impl Estimator {
     /// The result at the current (best) pose. `seconds` is the caller's measurement;
-    /// `ground_truth` adds the error figures.
+    /// `ground_truth` adds the error figures (allowing for the object's symmetries).
     pub fn result(&self, seconds: f64, ground_truth: Option<&Pose>) -> FitResult {
         let pose = self.pose();
         let figs = self.view_figures(&pose);
@@ -84,22 +102,36 @@ impl Estimator {
             .iter()
             .zip(&figs)
             .map(|(v, f)| ViewResult {
-                name: v.name.clone(),
-                iou: f.0,
-                hausdorff_px: f.1,
+                name: v.name().to_string(),
+                iou: f.iou,
+                hausdorff_px: f.hausdorff_px,
             })
             .collect();
         let mean_iou = views.iter().map(|v| v.iou).sum::<f64>() / views.len().max(1) as f64;
+        let progress = self.progress();
+        let judgement = self.judgement();
+        let (errors, symmetric) = match ground_truth {
+            None => (None, None),
+            Some(gt) => {
+                let syms = symmetry::symmetries(self.mesh());
+                let truth = symmetry::closest_equivalent(self.mesh(), &syms, &pose, gt);
+                (Some(pose_errors(self.mesh(), &pose, &truth)), Some(syms.len() > 1))
+            }
+        };
         FitResult {
             pose: PoseOut::from_pose(&pose),
             matrix: mat4_to_rows(pose.matrix()),
             views,
             mean_iou,
             loss_history: self.loss_history(),
-            iterations: self.progress().iteration,
-            termination: self.progress().termination,
+            iterations: progress.iteration,
+            termination: progress.termination,
+            verdict: judgement.map(|j| j.verdict),
+            verdict_reasons: judgement.map(|j| j.reasons.clone()).unwrap_or_default(),
+            doubted_views: judgement.map(|j| j.doubted_views.clone()).unwrap_or_default(),
             seconds,
-            errors: ground_truth.map(|gt| pose_errors(self.mesh(), &pose, gt)),
+            errors,
+            symmetric,
         }
     }
 }

@@ -76,6 +76,55 @@ pub fn orthonormalize(r: DMat3) -> DMat3 {
     DMat3::from_quat(DQuat::from_mat3(&r).normalize())
 }
 
+/// How far from SO(3) a rotation on the wire may be (max |RᵀR − I|, |det − 1|) and
+/// still be accepted, projected onto the nearest rotation with a warning (SPEC §2):
+/// real calibration data and forward kinematics printed with finite digits are never
+/// exactly orthonormal.
+pub const SO3_TOLERANCE: f64 = 0.05;
+
+/// Deviations below this are rounding, accepted without a warning.
+pub const SO3_SILENT: f64 = 1e-6;
+
+/// The rotation nearest to `r` in the Frobenius norm (the orthogonal factor of its
+/// polar decomposition), by Newton's iteration `X ← ½(X + X⁻ᵀ)`, which converges
+/// quadratically from any non-singular `r`; `r` must have a positive determinant.
+pub fn nearest_rotation(r: DMat3) -> DMat3 {
+    let mut x = r;
+    for _ in 0..30 {
+        let next = (x + x.inverse().transpose()) * 0.5;
+        let change = (next - x).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        x = next;
+        if change < 1e-15 {
+            break;
+        }
+    }
+    // One last clean-up of rounding.
+    orthonormalize(x)
+}
+
+/// Accepts a rotation from the wire: returns it projected onto SO(3) and its
+/// deviation ([`orthonormality_error`]) when that is within [`SO3_TOLERANCE`] and the
+/// determinant is positive; otherwise a message saying why it is not a rotation.
+pub fn accept_rotation(r: DMat3) -> std::result::Result<(DMat3, f64), String> {
+    if !r.is_finite() {
+        return Err("contains a non-finite number".into());
+    }
+    let e = orthonormality_error(r);
+    let det = r.determinant();
+    if det.abs() < 1e-6 {
+        return Err(format!("is singular (det = {det:.2e})"));
+    }
+    if det < 0.0 {
+        return Err(format!("is a reflection, not a rotation (det = {det:.3})"));
+    }
+    if e > SO3_TOLERANCE {
+        return Err(format!(
+            "is not orthonormal (|RᵀR − I|, |det − 1| up to {e:.2e}; at most {SO3_TOLERANCE} is accepted)"
+        ));
+    }
+    Ok((if e > 0.0 { nearest_rotation(r) } else { r }, e))
+}
+
 /// Largest absolute entry of `RᵀR − I`, and the determinant: how far `r` is from a rotation.
 pub fn orthonormality_error(r: DMat3) -> f64 {
     let e = r.transpose() * r - DMat3::IDENTITY;
@@ -122,6 +171,25 @@ pub fn euler_grid(k: usize) -> Vec<DMat3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn near_rotations_are_projected_and_far_ones_refused() {
+        let r = exp(DVec3::new(0.3, -0.2, 0.5));
+        // Rows perturbed by 1e-2, as rounded annotations are.
+        let noisy = r + DMat3::from_cols_array(&[0.004, -0.006, 0.002, 0.0, 0.005, -0.003, 0.001, 0.0, -0.004]);
+        let (got, e) = accept_rotation(noisy).unwrap();
+        assert!(e > 1e-3 && e < SO3_TOLERANCE, "{e}");
+        assert!(orthonormality_error(got) < 1e-12);
+        // The nearest rotation is at least as close to the input as the true one.
+        let dist = |a: DMat3, b: DMat3| (a - b).to_cols_array().iter().map(|v| v * v).sum::<f64>();
+        assert!(dist(got, noisy) <= dist(r, noisy) + 1e-15);
+        assert!(geodesic_deg(got, r) < 1.0);
+        assert!(accept_rotation(r * 2.0).unwrap_err().contains("not orthonormal"));
+        assert!(accept_rotation(DMat3::ZERO).unwrap_err().contains("singular"));
+        let reflect = DMat3::from_diagonal(DVec3::new(1.0, 1.0, -1.0));
+        assert!(accept_rotation(reflect).unwrap_err().contains("reflection"));
+        assert!(geodesic_deg(accept_rotation(r).unwrap().0, r) < 1e-9);
+    }
 
     #[test]
     fn exp_log_round_trip() {

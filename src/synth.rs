@@ -67,11 +67,9 @@ impl SynthScene {
             .iter()
             .zip(&self.masks)
             .enumerate()
-            .map(|(i, (c, m))| crate::view::View {
-                name: format!("view{i}"),
-                camera: *c,
-                mask: m.clone(),
-                image: None,
+            .map(|(i, (c, m))| {
+                crate::view::View::new(&format!("view{i}"), *c, m.clone(), None, None, &Default::default())
+                    .expect("synthesize keeps the object inside every canvas: masks are not empty")
             })
             .collect()
     }
@@ -273,7 +271,7 @@ mod tests {
             assert!(k.area() > 100 && !k.touches_border());
             assert!(c.to_camera(s.pose.translation).z > 0.0);
         }
-        assert_eq!(s.views()[4].name, "view4");
+        assert_eq!(s.views()[4].name(), "view4");
         // Deterministic for a seed.
         assert_eq!(synthesize(&m, &settings, None).unwrap().pose, s.pose);
     }

@@ -58,6 +58,8 @@ export interface Progress {
   /** Hard IoU per view at full resolution, at `pose`. */
   iou: number[];
   termination: null | "converged" | "max_iterations" | "stalled";
+  /** The verdict once the fit is done: "ok", "poor" or "failed" (a failed fit is never "converged"). */
+  verdict: null | "ok" | "poor" | "failed";
   done: boolean;
   /** Seconds spent in step() so far. */
   seconds: number;
@@ -71,7 +73,11 @@ export interface FitResult {
   views: { name: string; iou: number; hausdorff_px: number }[];
   mean_iou: number; loss_history: number[]; iterations: number;
   termination: null | "converged" | "max_iterations" | "stalled";
-  seconds: number; errors?: Record<string, number>;
+  /** "ok", "poor" or "failed", with the reasons and the views it doubts. */
+  verdict: null | "ok" | "poor" | "failed"; verdict_reasons: string[]; doubted_views: string[];
+  seconds: number;
+  /** Against the ground truth (its symmetric equivalent closest to the estimate), when given. */
+  errors?: Record<string, number>; symmetric?: boolean;
 }
 "#;
 

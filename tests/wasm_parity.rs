@@ -35,7 +35,7 @@ fn the_recorded_native_fit_is_current() {
     let scene = load_scene("scene.json", &text, &|p| std::fs::read(dir.join(p)).ok()).unwrap();
     let mut est = Estimator::new(scene.mesh, scene.views, scene.initial_pose, FitSettings::default()).unwrap();
     while !est.is_done() {
-        est.step();
+        est.step().unwrap();
     }
     let result = est.result(0.0, scene.ground_truth_pose.as_ref());
     let now = serde_json::to_value(&result).unwrap();

@@ -5,7 +5,9 @@
 
 use super::files::{load_pose, load_scene_file, CliResult};
 use localisebot::estimator::{Estimator, FitSettings};
-use localisebot::refine::{RefineTarget, StageSettings};
+use localisebot::loss::objective::{Objective, ObjectiveSettings};
+use localisebot::loss::target::Window;
+use localisebot::raster::soft::SoftSettings;
 use localisebot::synth::{blob_mesh, synthesize, SynthSettings};
 use localisebot::{io, Mesh, Pose, View};
 use std::path::PathBuf;
@@ -61,7 +63,7 @@ pub fn run(a: &BenchArgs) -> CliResult {
         let size = scene
             .views
             .iter()
-            .map(|v| v.camera.width.max(v.camera.height))
+            .map(|v| v.camera().width.max(v.camera().height))
             .max()
             .unwrap_or(0);
         let ms = time_fwd_bwd(&scene.mesh, &scene.views, &pose, size, a.sigma, reps);
@@ -102,7 +104,7 @@ pub fn run(a: &BenchArgs) -> CliResult {
                     let start = Instant::now();
                     let mut est = Estimator::new(mesh.clone(), views.clone(), None, FitSettings::default())
                         .map_err(|e| e.to_string())?;
-                    est.run(usize::MAX);
+                    est.run(usize::MAX).map_err(|e| e.to_string())?;
                     let secs = start.elapsed().as_secs_f64();
                     let r = est.result(secs, Some(&s.pose));
                     (Some(secs), r.errors.map(|e| e.add_rel), Some(r.mean_iou))
@@ -125,29 +127,29 @@ pub fn run(a: &BenchArgs) -> CliResult {
     Ok(())
 }
 
-/// Median milliseconds of one multi-view loss + 9-gradient at `pose`.
+/// Median milliseconds of one multi-view loss + 9-gradient at `pose` (the fit's
+/// objective with its default λ1, λ2; every view's whole image at `size`).
 fn time_fwd_bwd(mesh: &Mesh, views: &[View], pose: &Pose, size: u32, sigma: f64, reps: usize) -> f64 {
-    let stage = StageSettings {
-        resolution: size,
-        sigma,
-        iterations: 1,
-        lr_start: 1.0,
-        lr_end: 1.0,
-        keep: 1,
-        contour: false,
-        optimiser: localisebot::refine::Optimiser::Adam,
+    let d = FitSettings::default();
+    let settings = ObjectiveSettings {
+        soft: SoftSettings { sigma, eps: 1e-4 },
+        lambda_iou: d.lambda_iou,
+        lambda_contour: d.lambda_contour,
     };
-    let mut target = RefineTarget::new(views, &stage, 1.0, 0.0);
+    let windows: Vec<Window> = views.iter().map(|v| Window::full(v.camera())).collect();
+    let Ok(mut objective) = Objective::new(views, &windows, size, settings) else {
+        return f64::NAN;
+    };
     // A pose slightly off the truth, as during a fit.
     let p = Pose {
         translation: pose.translation + glam::DVec3::splat(0.01),
         ..*pose
     };
-    target.loss_and_gradient(mesh, &p); // warm the buffers
+    let _ = objective.value_and_gradient(mesh, &p); // warm the buffers
     let mut times: Vec<f64> = (0..reps)
         .map(|_| {
             let t = Instant::now();
-            std::hint::black_box(target.loss_and_gradient(mesh, &p));
+            let _ = std::hint::black_box(objective.value_and_gradient(mesh, &p));
             t.elapsed().as_secs_f64() * 1e3
         })
         .collect();

@@ -6,9 +6,8 @@ use super::files::{load_scene_file, to_json, write, CliResult};
 use super::fit::FitOptions;
 use indicatif::{ProgressBar, ProgressStyle};
 use localisebot::estimator::{Estimator, FitSettings};
-use localisebot::eval::{
-    accuracy_measure, closest_equivalent, report_markdown, summarise, symmetries, SceneOutcome, Summary,
-};
+use localisebot::eval::{accuracy_measure, report_markdown, summarise, SceneOutcome, Summary};
+use localisebot::symmetry::{closest_equivalent, symmetries};
 use localisebot::{grasp, Pose, Scene};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -127,7 +126,7 @@ fn fit(scene: &Scene, views: usize, settings: &FitSettings) -> CliResult<(Estima
         settings.clone(),
     )
     .map_err(|e| e.to_string())?;
-    est.run(usize::MAX);
+    est.run(usize::MAX).map_err(|e| e.to_string())?;
     Ok((est, start.elapsed().as_secs_f64()))
 }
 
@@ -136,37 +135,28 @@ fn evaluate_scene(path: &Path, settings: &FitSettings, curve: bool) -> CliResult
     let Some(gt) = scene.ground_truth_pose else {
         return Ok(None);
     };
-    let syms = symmetries(&scene.mesh);
-    let symmetric = syms.len() > 1;
-    // A symmetric object's pose is known up to its symmetries: measure against the
-    // equivalent of the truth closest to the estimate.
-    let truth = |p: &Pose| {
-        if symmetric {
-            closest_equivalent(&scene.mesh, &syms, p, &gt)
-        } else {
-            gt
-        }
-    };
     let n = scene.views.len();
     let (est, secs) = fit(&scene, n, settings).map_err(|e| format!("{}: {e}", path.display()))?;
-    let gt_eq = truth(&est.pose());
-    let result = est.result(secs, Some(&gt_eq));
-    let predicted_area = est.view_figures(&est.pose()).iter().map(|f| f.2.area()).collect();
+    // Errors allow for the object's symmetries (the result does it); grasps are
+    // checked against the same equivalent of the truth.
+    let result = est.result(secs, Some(&gt));
+    let symmetric = result.symmetric == Some(true);
+    let gt_eq = closest_equivalent(&scene.mesh, &symmetries(&scene.mesh), &est.pose(), &gt);
+    let predicted_area = est
+        .view_figures(&est.pose())
+        .iter()
+        .map(|f| f.rendered.area())
+        .collect();
     let (grasps_correct, grasps_total) = grasp_accuracy(&scene, &est.pose(), &gt_eq);
     let mut loss_by_views = Vec::new();
     let mut add_rel_by_views = Vec::new();
     if curve {
         for k in 1..=n {
-            let (e, s) = if k == n {
-                (None, secs)
-            } else {
-                (Some(fit(&scene, k, settings)?), 0.0)
+            let refit = if k == n { None } else { Some(fit(&scene, k, settings)?) };
+            let r = match &refit {
+                Some((est_k, s)) => est_k.result(*s, Some(&gt)),
+                None => result.clone(),
             };
-            let (est_k, secs_k) = match &e {
-                Some((est_k, s)) => (est_k, *s),
-                None => (&est, s),
-            };
-            let r = est_k.result(secs_k, Some(&truth(&est_k.pose())));
             loss_by_views.push(r.loss_history.last().copied().unwrap_or(f64::NAN));
             let tmp = SceneOutcome {
                 name: String::new(),
@@ -202,7 +192,7 @@ fn grasp_accuracy(scene: &Scene, est: &Pose, gt: &Pose) -> (usize, usize) {
     let mut total = 0;
     for g in &scene.grasps {
         for v in &scene.views {
-            if let Some(ok) = grasp::grasp_transfer_correct(g, est, gt, &v.camera) {
+            if let Some(ok) = grasp::grasp_transfer_correct(g, est, gt, v.camera()) {
                 total += 1;
                 correct += ok as usize;
             }

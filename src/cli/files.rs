@@ -35,10 +35,14 @@ pub fn load_mesh(path: &Path) -> CliResult<Mesh> {
     io::load_mesh(&name, &bytes, &|uri| std::fs::read(dir.join(uri)).ok()).map_err(|e| e.to_string())
 }
 
-/// Loads a scene file and everything it names.
+/// Loads a scene file and everything it names; prints the loader's warnings on stderr.
 pub fn load_scene_file(path: &Path) -> CliResult<Scene> {
     let text = read_text(path)?;
-    load_scene(&path.to_string_lossy(), &text, &|p| std::fs::read(p).ok()).map_err(|e| e.to_string())
+    let scene = load_scene(&path.to_string_lossy(), &text, &|p| std::fs::read(p).ok()).map_err(|e| e.to_string())?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(scene)
 }
 
 /// Loads a pose: a pose file, or a result file whose "pose" key holds one.

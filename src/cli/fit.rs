@@ -1,69 +1,96 @@
-//! `localisebot fit SCENE --out RESULT [--overlays DIR]`: the whole pipeline on a
-//! scene file, with a progress bar on a terminal (quiet otherwise).
+//! `localisebot fit SCENE --out RESULT [--overlays DIR] [--strict]`: the whole
+//! pipeline on a scene file, with a progress bar on a terminal (quiet otherwise).
+//! Every option not given takes [`FitSettings::default`]'s value.
 
 use super::files::{load_pose, load_scene_file, to_json, write, CliResult};
-use clap::Args;
+use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use localisebot::estimator::{Estimator, FitSettings, Phase, ScaleMode};
 use localisebot::io::png::encode_rgba;
+use localisebot::optim::schedule::Optimiser;
 use localisebot::optim::search::Sampling;
 use localisebot::overlay;
-use localisebot::refine::Optimiser;
+use localisebot::verdict::Verdict;
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// Options shared by `fit` and `eval`.
+/// `--optimiser`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum OptimiserArg {
+    /// Levenberg–Marquardt on the loss's Gauss–Newton model (the default).
+    Lm,
+    /// Adam on the loss's gradient.
+    Adam,
+}
+
+/// `--scale`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ScaleArg {
+    /// Per-axis scale (9-DoF; the default).
+    Anisotropic,
+    /// One scale for all axes.
+    Isotropic,
+    /// The CAD model is to scale: the scale is not fitted.
+    Fixed,
+}
+
+/// Options shared by `fit` and `eval`; each left out takes the library's default.
 #[derive(Args, Clone, Debug)]
 pub struct FitOptions {
     /// Orientation candidates: `uniform:N` (default uniform:512) or the paper's grid `euler:K` (K³ candidates).
-    #[arg(long, default_value = "uniform:512")]
-    pub search: String,
-    /// How many of the best search candidates to refine.
-    #[arg(long, default_value_t = 4)]
-    pub keep: usize,
-    /// Weight λ1 of the IoU loss (stages using Adam; LM stages fit the pixel residuals).
-    #[arg(long, default_value_t = 1.0)]
-    pub lambda_iou: f64,
-    /// Weight λ2 of the contour (Hausdorff) loss (stages using Adam).
+    #[arg(long)]
+    pub search: Option<String>,
+    /// How many of the best search candidates to refine (default 4).
+    #[arg(long)]
+    pub keep: Option<usize>,
+    /// Weight λ1 of the soft IoU loss (default 1).
+    #[arg(long)]
+    pub lambda_iou: Option<f64>,
+    /// Weight λ2 of the contour (chamfer-type mean distance) loss (default 1).
     #[arg(long)]
     pub lambda_contour: Option<f64>,
-    /// Optimiser of the refinement stages: adam, or lm (Levenberg–Marquardt).
-    #[arg(long)]
-    pub optimiser: Option<String>,
-    /// Scale: anisotropic (9-DoF), isotropic, or fixed (the CAD model is to scale).
-    #[arg(long, default_value = "anisotropic")]
-    pub scale: String,
+    /// Optimiser of the refinement stages (default lm).
+    #[arg(long, value_enum)]
+    pub optimiser: Option<OptimiserArg>,
+    /// How the scale is fitted (default anisotropic).
+    #[arg(long, value_enum)]
+    pub scale: Option<ScaleArg>,
 }
 
 impl FitOptions {
     /// The core settings these options describe.
     pub fn settings(&self) -> CliResult<FitSettings> {
         let mut s = FitSettings::default();
-        let (kind, n) = self.search.split_once(':').ok_or_else(|| bad_search(&self.search))?;
-        let n: usize = n.parse().map_err(|_| bad_search(&self.search))?;
-        s.search.sampling = match kind {
-            "uniform" if (1..=100_000).contains(&n) => Sampling::Uniform(n),
-            "euler" if (1..=64).contains(&n) => Sampling::EulerGrid(n),
-            _ => return Err(bad_search(&self.search)),
-        };
-        s.search.keep = self.keep.max(1);
-        s.lambda_iou = self.lambda_iou;
+        if let Some(search) = &self.search {
+            let (kind, n) = search.split_once(':').ok_or_else(|| bad_search(search))?;
+            let n: usize = n.parse().map_err(|_| bad_search(search))?;
+            s.search.sampling = match kind {
+                "uniform" if (1..=100_000).contains(&n) => Sampling::Uniform(n),
+                "euler" if (1..=64).contains(&n) => Sampling::EulerGrid(n),
+                _ => return Err(bad_search(search)),
+            };
+        }
+        if let Some(k) = self.keep {
+            s.search.keep = k;
+        }
+        if let Some(l) = self.lambda_iou {
+            s.lambda_iou = l;
+        }
         if let Some(l) = self.lambda_contour {
             s.lambda_contour = l;
         }
-        s.scale_mode = match self.scale.as_str() {
-            "anisotropic" => ScaleMode::Anisotropic,
-            "isotropic" => ScaleMode::Isotropic,
-            "fixed" => ScaleMode::Fixed,
-            o => return Err(format!("--scale: expected anisotropic, isotropic or fixed, got '{o}'")),
-        };
-        if let Some(o) = &self.optimiser {
-            let o = match o.as_str() {
-                "adam" => Optimiser::Adam,
-                "lm" => Optimiser::LevenbergMarquardt,
-                o => return Err(format!("--optimiser: expected adam or lm, got '{o}'")),
+        if let Some(o) = self.optimiser {
+            s.optimiser = match o {
+                OptimiserArg::Lm => Optimiser::LevenbergMarquardt,
+                OptimiserArg::Adam => Optimiser::Adam,
             };
-            s.stages.iter_mut().for_each(|st| st.optimiser = o);
+        }
+        if let Some(m) = self.scale {
+            s.scale_mode = match m {
+                ScaleArg::Anisotropic => ScaleMode::Anisotropic,
+                ScaleArg::Isotropic => ScaleMode::Isotropic,
+                ScaleArg::Fixed => ScaleMode::Fixed,
+            };
         }
         s.validate().map_err(|e| e.to_string())?;
         Ok(s)
@@ -88,12 +115,18 @@ pub struct FitArgs {
     /// Start from this pose instead of searching (overrides the scene's initial_pose).
     #[arg(long)]
     initial_pose: Option<PathBuf>,
+    /// Exit with status 3 unless the verdict is `ok` (the result is written either way).
+    #[arg(long)]
+    strict: bool,
     #[command(flatten)]
     options: FitOptions,
 }
 
-/// Runs `fit`.
-pub fn run(a: &FitArgs) -> CliResult {
+/// Exit status of `fit --strict` when the verdict is not `ok`.
+pub const NOT_OK: i32 = 3;
+
+/// Runs `fit`; returns the exit status (0, or [`NOT_OK`] with `--strict`).
+pub fn run(a: &FitArgs) -> CliResult<i32> {
     let settings = a.options.settings()?;
     let scene = load_scene_file(&a.scene)?;
     if scene.views.len() == 1 {
@@ -107,8 +140,8 @@ pub fn run(a: &FitArgs) -> CliResult {
         None => scene.initial_pose,
     };
     let start = Instant::now();
-    let mut est = Estimator::new(scene.mesh.clone(), scene.views.clone(), initial, settings)
-        .map_err(|e| format!("{}: {e}", a.scene.display()))?;
+    let fail = |e: localisebot::Error| format!("{}: {e}", a.scene.display());
+    let mut est = Estimator::new(scene.mesh.clone(), scene.views.clone(), initial, settings).map_err(fail)?;
     let bar = ProgressBar::new(100);
     bar.set_style(
         ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:30}] {msg}")
@@ -120,7 +153,7 @@ pub fn run(a: &FitArgs) -> CliResult {
     let mut last = Instant::now();
     while !est.is_done() {
         let before = est.progress_phase();
-        let p = est.step();
+        let p = est.step().map_err(fail)?;
         let now = Instant::now();
         match before {
             (Phase::Search, _) => search_s += (now - last).as_secs_f64(),
@@ -148,25 +181,21 @@ pub fn run(a: &FitArgs) -> CliResult {
     }
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    // A symmetric object's pose is known up to its symmetries: errors are measured
-    // against the equivalent of the truth closest to the estimate.
-    let truth = scene.ground_truth_pose.map(|gt| {
-        let syms = localisebot::eval::symmetries(&scene.mesh);
-        localisebot::eval::closest_equivalent(&scene.mesh, &syms, &est.pose(), &gt)
-    });
-    let result = est.result(seconds, truth.as_ref());
+    let result = est.result(seconds, scene.ground_truth_pose.as_ref());
     write(&a.out, to_json(&result).as_bytes())?;
     if let Some(dir) = &a.overlays {
         let pose = est.pose();
-        for (v, (_, _, m)) in scene.views.iter().zip(est.view_figures(&pose)) {
-            let mut img = overlay::overlay(v, Some(&m));
-            localisebot::grasp::draw_grasps(&mut img, &scene.grasps, &pose, &v.camera);
-            write(&dir.join(format!("{}.png", v.name)), &encode_rgba(&img))?;
+        for (v, f) in scene.views.iter().zip(est.view_figures(&pose)) {
+            let mut img = overlay::overlay(v, Some(&f.rendered));
+            localisebot::grasp::draw_grasps(&mut img, &scene.grasps, &pose, v.camera());
+            write(&dir.join(format!("{}.png", v.name())), &encode_rgba(&img))?;
         }
     }
+    let verdict = result.verdict.unwrap_or(Verdict::Failed);
     let mut line = format!(
-        "{}: mean IoU {:.4} in {:.2} s (search {:.2} s, stages {} s; {} iterations, {:?})",
+        "{}: verdict {} — mean IoU {:.4} in {:.2} s (search {:.2} s, stages {} s; {} iterations, {:?})",
         a.out.display(),
+        verdict.as_str(),
         result.mean_iou,
         seconds,
         search_s,
@@ -176,11 +205,20 @@ pub fn run(a: &FitArgs) -> CliResult {
     );
     if let Some(e) = &result.errors {
         line += &format!(
-            "; rotation error {:.2}°, ADD {:.2}% of diameter",
+            "; rotation error {:.2}°, ADD{} {:.2}% of diameter",
             e.rotation_deg,
-            100.0 * e.add_rel
+            if result.symmetric == Some(true) { "-S" } else { "" },
+            100.0
+                * if result.symmetric == Some(true) {
+                    e.add_s_rel
+                } else {
+                    e.add_rel
+                }
         );
     }
     eprintln!("{line}");
-    Ok(())
+    for r in &result.verdict_reasons {
+        eprintln!("  {r}");
+    }
+    Ok(if a.strict && verdict != Verdict::Ok { NOT_OK } else { 0 })
 }

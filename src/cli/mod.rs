@@ -31,7 +31,8 @@ enum Command {
     },
     /// Make a synthetic scene: cameras around the mesh, masks rendered at a (random) pose.
     Synth(synth::SynthArgs),
-    /// Estimate the object's pose in a scene (search, then refine); write the result JSON.
+    /// Estimate the object's pose in a scene (search, then refine); write the result JSON
+    /// (exit status 3 with --strict unless the verdict is ok).
     Fit(fit::FitArgs),
     /// Print the multi-view loss, per-view losses and the 9-gradient at a pose, as JSON.
     Loss(loss::LossArgs),
@@ -59,17 +60,17 @@ enum Command {
 pub fn main() -> i32 {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Info { mesh } => info::run(&mesh),
-        Command::Synth(args) => synth::run(&args),
+        Command::Info { mesh } => info::run(&mesh).map(|_| 0),
+        Command::Synth(args) => synth::run(&args).map(|_| 0),
         Command::Fit(args) => fit::run(&args),
-        Command::Loss(args) => loss::run(&args),
-        Command::Import(cmd) => import::run(&cmd),
-        Command::Eval(args) => eval::run(&args),
-        Command::Bench(args) => bench::run(&args),
-        Command::Render { scene, pose, out } => render::run(&scene, &pose, &out),
+        Command::Loss(args) => loss::run(&args).map(|_| 0),
+        Command::Import(cmd) => import::run(&cmd).map(|_| 0),
+        Command::Eval(args) => eval::run(&args).map(|_| 0),
+        Command::Bench(args) => bench::run(&args).map(|_| 0),
+        Command::Render { scene, pose, out } => render::run(&scene, &pose, &out).map(|_| 0),
     };
     match result {
-        Ok(()) => 0,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e}");
             1

@@ -12,22 +12,22 @@ pub fn run(scene: &Path, pose: &Path, out: &Path) -> CliResult {
     let scene = load_scene_file(scene)?;
     let pose = load_pose(pose)?;
     for v in &scene.views {
-        let rendered = hard::render_checked(&v.name, &scene.mesh, &pose, &v.camera).map_err(|e| e.to_string())?;
+        let rendered = hard::render_checked(v.name(), &scene.mesh, &pose, v.camera()).map_err(|e| e.to_string())?;
         let mut img = overlay::overlay(v, Some(&rendered));
-        grasp::draw_grasps(&mut img, &scene.grasps, &pose, &v.camera);
-        let path = out.join(format!("{}.png", v.name));
+        grasp::draw_grasps(&mut img, &scene.grasps, &pose, v.camera());
+        let path = out.join(format!("{}.png", v.name()));
         write(&path, &encode_rgba(&img))?;
         if !scene.grasps.is_empty() {
-            let rects = grasp::rectangles(&scene.grasps, &pose, &v.camera);
+            let rects = grasp::rectangles(&scene.grasps, &pose, v.camera());
             write(
-                &out.join(format!("{}.grasps.txt", v.name)),
+                &out.join(format!("{}.grasps.txt", v.name())),
                 grasp::rectangles_to_txt(&rects).as_bytes(),
             )?;
         }
         println!(
             "{}: IoU {:.4} -> {}",
-            v.name,
-            metrics::hard_iou(&rendered, &v.mask),
+            v.name(),
+            metrics::hard_iou_known(&rendered, v.mask(), v.ignore()),
             path.display()
         );
     }

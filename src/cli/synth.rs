@@ -80,6 +80,7 @@ pub fn run(a: &SynthArgs) -> CliResult {
             None => None,
         };
         views.push(ViewJson {
+            ignore: None,
             name,
             image,
             mask: rel,

@@ -253,6 +253,7 @@ pub fn import(files: Resolver, opts: &BopOptions) -> Result<Imported> {
         });
         files_out.push((c.mask_rel.clone(), c.mask_bytes));
         views.push(ViewJson {
+            ignore: None,
             name,
             image,
             mask: c.mask_rel,

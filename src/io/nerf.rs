@@ -193,6 +193,7 @@ pub fn import(transforms_file: &str, text: &str, files: Resolver, mesh_file: &st
         out.files.push((mask_rel.clone(), mask_png(&mask)));
         out.files.push((image_rel.clone(), image_bytes));
         out.scene.views.push(ViewJson {
+            ignore: None,
             name,
             image: Some(image_rel),
             mask: mask_rel,

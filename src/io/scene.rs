@@ -4,10 +4,11 @@
 
 use crate::camera::CameraJson;
 use crate::error::{Error, Result};
-use crate::io::{join, load_mesh, mask::decode_image, mask::decode_mask, parent_dir, Resolver};
+use crate::io::mask::{decode_image_sized, decode_mask_sized};
+use crate::io::{join, load_mesh, parent_dir, Resolver};
 use crate::mesh::Mesh;
 use crate::pose::{Pose, PoseJson};
-use crate::view::View;
+use crate::view::{View, ViewSources};
 use serde::{Deserialize, Serialize};
 
 /// One view's entry in the scene file.
@@ -20,6 +21,10 @@ pub struct ViewJson {
     pub image: Option<String>,
     /// Mask PNG, relative to the scene file.
     pub mask: String,
+    /// Optional ignore mask PNG (unknown pixels: occluders, other objects), relative
+    /// to the scene file; same size and pixel rule as the mask.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ignore: Option<String>,
     /// Camera intrinsics and extrinsics.
     pub camera: CameraJson,
 }
@@ -64,6 +69,9 @@ pub struct Scene {
     pub grasps: Vec<crate::grasp::Grasp>,
     /// The file as read.
     pub json: SceneJson,
+    /// What was accepted with a reservation (e.g. a camera rotation projected onto
+    /// SO(3)), one line each, naming the view.
+    pub warnings: Vec<String>,
 }
 
 impl SceneJson {
@@ -121,6 +129,7 @@ pub fn scene_from_parts(
         });
     }
     let mut views = Vec::with_capacity(json.views.len());
+    let mut warnings = Vec::new();
     for (i, vj) in json.views.iter().enumerate() {
         if json.views[..i].iter().any(|o| o.name == vj.name) {
             return Err(Error::Json {
@@ -128,68 +137,47 @@ pub fn scene_from_parts(
                 problem: format!("two views are named '{}'", vj.name),
             });
         }
-        let camera = vj.camera.to_camera(&vj.name)?;
-        let mask = decode_mask(&fetch(&vj.mask)?, &vj.name, &vj.mask)?;
-        check_mask(&vj.name, &vj.mask, &mask, camera.width, camera.height)?;
+        let (camera, warning) = vj.camera.to_camera_with_warning(&vj.name)?;
+        warnings.extend(warning);
+        let (w, h) = (camera.width, camera.height);
+        let mask = decode_mask_sized(&fetch(&vj.mask)?, &vj.name, &vj.mask, w, h)?;
+        let ignore = match &vj.ignore {
+            None => None,
+            Some(f) => Some(decode_mask_sized(&fetch(f)?, &vj.name, f, w, h)?),
+        };
         let image = match &vj.image {
             None => None,
-            Some(f) => {
-                let img = decode_image(&fetch(f)?, &vj.name, f)?;
-                if (img.width, img.height) != (camera.width, camera.height) {
-                    return Err(Error::Image {
-                        view: vj.name.clone(),
-                        file: f.clone(),
-                        problem: format!(
-                            "is {}×{} but the camera is {}×{}",
-                            img.width, img.height, camera.width, camera.height
-                        ),
-                    });
-                }
-                Some(img)
-            }
+            Some(f) => Some(decode_image_sized(&fetch(f)?, &vj.name, f, w, h)?),
         };
-        views.push(View {
-            name: vj.name.clone(),
-            camera,
-            mask,
-            image,
-        });
+        let sources = ViewSources::files(
+            &vj.mask,
+            vj.ignore.as_deref().unwrap_or(""),
+            vj.image.as_deref().unwrap_or(""),
+        );
+        views.push(View::new(&vj.name, camera, mask, ignore, image, &sources)?);
     }
-    let pose = |p: &Option<PoseJson>, key: &str| -> Result<Option<Pose>> {
-        p.as_ref()
-            .map(|p| {
-                p.to_pose().map_err(|e| Error::Json {
-                    file: scene_file.into(),
-                    problem: format!("{key}: {e}"),
-                })
-            })
-            .transpose()
+    let mut pose = |p: &Option<PoseJson>, key: &str| -> Result<Option<Pose>> {
+        let Some(p) = p else { return Ok(None) };
+        let (pose, deviation) = p.to_pose_with_warning().map_err(|e| Error::Json {
+            file: scene_file.into(),
+            problem: format!("{key}: {e}"),
+        })?;
+        if let Some(d) = deviation {
+            warnings.push(format!(
+                "{scene_file}: {key}: the rotation is off SO(3) by {d:.2e}: projected onto the nearest rotation"
+            ));
+        }
+        Ok(Some(pose))
     };
+    let initial_pose = pose(&json.initial_pose, "initial_pose")?;
+    let ground_truth_pose = pose(&json.ground_truth_pose, "ground_truth_pose")?;
     Ok(Scene {
-        initial_pose: pose(&json.initial_pose, "initial_pose")?,
-        ground_truth_pose: pose(&json.ground_truth_pose, "ground_truth_pose")?,
+        warnings,
+        initial_pose,
+        ground_truth_pose,
         grasps: crate::grasp::grasps_from_json(&json.grasps, scene_file)?,
         mesh,
         views,
         json,
     })
-}
-
-/// Checks a mask's size against its camera and that it is not empty.
-pub fn check_mask(view: &str, file: &str, mask: &crate::mask::Mask, width: u32, height: u32) -> Result<()> {
-    let err = |p: String| Error::Mask {
-        view: view.into(),
-        file: file.into(),
-        problem: p,
-    };
-    if (mask.width, mask.height) != (width, height) {
-        return Err(err(format!(
-            "is {}×{} but the camera is {}×{}",
-            mask.width, mask.height, width, height
-        )));
-    }
-    if mask.area() == 0 {
-        return Err(err("is empty: no pixel is marked as object".into()));
-    }
-    Ok(())
 }

@@ -1,5 +1,6 @@
-//! Contour (Hausdorff-style) loss: a two-sided, distance-weighted measure of how far
-//! the soft silhouette A strays from the mask M's contour (SPEC §4 "Losses").
+//! Contour loss — a two-sided, chamfer-type mean distance between the soft
+//! silhouette A and the mask M's contour (SPEC §4 "Losses": the paper's Hausdorff
+//! term, made differentiable as a distance-weighted mean rather than a maximum).
 //!
 //! With `DT_out(p)` the distance (px, pixel centres) from p to the nearest mask pixel
 //! (0 on the mask) and `DT_in(p)` the distance from p to the nearest background pixel
@@ -18,6 +19,11 @@
 //! growing (and keeps a gradient) when the render and the mask are disjoint — but,
 //! like any mask-based term, not for a render entirely off the canvas.
 //! Distances are exact (`crate::loss::edt`) and capped at the image's width + height.
+//!
+//! Unknown pixels (outside the image, or in the view's ignore mask) count in no sum:
+//! they are left out of L and of |M|, `d_out` measures the distance to the nearest
+//! mask *or unknown* pixel (the object may be hidden there) and `d_in` the distance
+//! to the nearest *known* background pixel.
 
 use crate::error::{Error, Result};
 use crate::loss::edt;
@@ -42,37 +48,60 @@ impl ContourTarget {
     /// Precomputes the distance transforms of `mask`; `view` names it in errors.
     /// Errors: an empty mask (the loss would have no scale).
     pub fn new(mask: &Mask, view: &str) -> Result<ContourTarget> {
-        let (w, h) = (mask.width as usize, mask.height as usize);
-        let area = mask.data.iter().filter(|&&v| v != 0).count();
+        ContourTarget::from_parts(mask.width, mask.height, &mask.data, None, view)
+    }
+
+    /// As [`ContourTarget::new`] for a `width`×`height` mask given as 0/1 bytes, with
+    /// `known` (1 = known) marking the pixels that count (all when `None`).
+    pub fn from_parts(width: u32, height: u32, mask: &[u8], known: Option<&[u8]>, view: &str) -> Result<ContourTarget> {
+        let (w, h) = (width as usize, height as usize);
+        let is_known = |i: usize| known.is_none_or(|k| k[i] != 0);
+        let area = (0..w * h).filter(|&i| mask[i] != 0 && is_known(i)).count();
         if area == 0 {
             return Err(Error::View {
                 view: view.into(),
                 problem: format!("the {w}×{h} mask is empty: the contour loss needs an object"),
             });
         }
-        let inside: Vec<bool> = mask.data.iter().map(|&v| v != 0).collect();
-        let outside: Vec<bool> = inside.iter().map(|&v| !v).collect();
+        // Where the object may be (mask or unknown), and known background.
+        let maybe_object: Vec<bool> = (0..w * h).map(|i| mask[i] != 0 || !is_known(i)).collect();
+        let background: Vec<bool> = (0..w * h).map(|i| mask[i] == 0 && is_known(i)).collect();
         let cap = (w + h) as f64;
-        let dt_out = edt::distance(w, h, &inside);
-        let dt_in = edt::distance(w, h, &outside);
+        let dt_out = edt::distance(w, h, &maybe_object);
+        let dt_in = edt::distance(w, h, &background);
         let norm = area as f64 * (area as f64 / std::f64::consts::PI).sqrt();
         let shift = |d: f64| (d.min(cap) - 0.5).max(0.0);
         let mut offset = 0.0;
-        let weight = dt_out
-            .iter()
-            .zip(&dt_in)
-            .map(|(&o, &i)| {
-                offset += shift(i);
-                (shift(o) - shift(i)) / norm
+        let weight = (0..w * h)
+            .map(|i| {
+                if !is_known(i) {
+                    return 0.0;
+                }
+                let (o, n) = (shift(dt_out[i]), shift(dt_in[i]));
+                offset += n;
+                (o - n) / norm
             })
             .collect();
         Ok(ContourTarget {
-            width: mask.width,
-            height: mask.height,
+            width,
+            height,
             weight,
             offset: offset / norm,
             norm,
         })
+    }
+
+    /// The per-pixel loss `ℓ_p = [A_p·d_out + (1 − A_p)·d_in]/N` of pixel `i` (its
+    /// share of [`ContourTarget::loss`]); with `w = ∂ℓ/∂A = (d_out − d_in)/N`, the
+    /// distances follow from w's sign: `d_out = max(w, 0)·N`, `d_in = max(−w, 0)·N`.
+    #[inline]
+    pub fn pixel_loss(&self, i: usize, a: f64) -> f64 {
+        let w = self.weight[i];
+        if w >= 0.0 {
+            a * w
+        } else {
+            (a - 1.0) * w
+        }
     }
 
     /// `∂L/∂A` per pixel: the signed distance to the contour (positive outside the

@@ -1,46 +1,51 @@
-//! The multi-view objective (SPEC §4): per view, render the soft silhouette, compare
-//! it with the mask by `λ1·IoU + λ2·contour`, and back-propagate to the 9 pose
-//! parameters; over views, the mean. Also the Gauss–Newton normal equations of the
-//! per-pixel residuals `A_p − M_p`.
+//! The multi-view objective (SPEC §4, the paper's loss): per view, render the soft
+//! silhouette A in the view's window and compare it with the mask M over the known
+//! pixels by `L_v = λ1·IoU_v + λ2·C_v` (soft IoU loss and the chamfer-type contour
+//! term of [`crate::loss::contour`]); over views, the weighted mean
+//! `L = Σ w_v·L_v / Σ w_v` (weights 1 unless the estimator down-weights a view that
+//! contradicts the others). One [`Objective`] serves the search (hard IoUs), every
+//! refinement stage (value, 9-gradient, Gauss–Newton model), `loss`, `bench` and the
+//! tests.
 //!
 //! Pose-gradient order: `[ω0, ω1, ω2, t0, t1, t2, ls0, ls1, ls2]` — ω the rotation
-//! perturbation on the right (`R·exp([ω]×)`, ω = 0 at the current pose), t the
-//! translation, ls the log scale (`s = exp(ls)`).
+//! perturbation on the right (`R·exp([ω]×)`), t the translation, ls the log scale.
+//!
+//! **The Gauss–Newton model** ([`Objective::normal_equations`]): the loss is a sum
+//! of per-pixel terms `ℓ_p(A_p) ≥ 0`. The soft IoU loss is exactly an L1 distance,
+//! `1 − I/U = Σ_p |A_p − M_p| / U` (for A ∈ [0, 1], M ∈ {0, 1}), and the contour
+//! term is `Σ_p [A_p·d_out + (1 − A_p)·d_in]/N`. Writing each as a residual
+//! `r_p = √(2ℓ_p)` (so that `½Σr² = L` exactly) gives the Gauss–Newton curvature
+//! `Σ_p ℓ'_p²/(2ℓ_p) · J_p J_pᵀ`, `J_p = ∂A_p/∂θ` — for the IoU term the
+//! iteratively-reweighted least-squares weights `1/(2U·|A_p − M_p|)` of an L1 fit.
+//! The gradient in the equations is the exact gradient of L (U's own dependence on A
+//! included), and the Levenberg–Marquardt acceptance test uses L itself, so LM
+//! minimises the paper's loss, not a surrogate.
 
-use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::loss::contour::ContourTarget;
-use crate::loss::iou::{soft_iou_loss, soft_iou_sums};
-use crate::mask::Mask;
+use crate::loss::iou::UNION_EPS;
+use crate::loss::target::{ViewTarget, Window};
 use crate::mesh::Mesh;
 use crate::pose::Pose;
+use crate::raster::hard::{render_bits_into, BitMask};
+use crate::raster::project::{project_mesh, POSE_DIM};
 use crate::raster::soft::{SoftRasterizer, SoftSettings};
-use crate::raster::soft_backward::{NormalEquations, POSE_DIM};
+use crate::view::View;
 
-/// Weights of the two loss terms.
+/// The objective's settings at one stage.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LossSettings {
-    /// λ1, weight of the soft IoU loss (default 1.0).
+pub struct ObjectiveSettings {
+    /// Soft-silhouette σ (pixel², at the stage's canvas) and cut-off ε.
+    pub soft: SoftSettings,
+    /// λ1, weight of the soft IoU loss.
     pub lambda_iou: f64,
-    /// λ2, weight of the contour loss (default 1.0). The contour loss is about
-    /// ½(δ/r)² for a misalignment of δ pixels of an object of radius r pixels, the
-    /// IoU loss about 4δ/(πr): with λ2 = 1 the IoU term leads near the optimum and the
-    /// contour term when render and mask barely overlap.
+    /// λ2, weight of the contour (chamfer) term.
     pub lambda_contour: f64,
 }
 
-impl Default for LossSettings {
-    fn default() -> Self {
-        LossSettings {
-            lambda_iou: 1.0,
-            lambda_contour: 1.0,
-        }
-    }
-}
-
-impl LossSettings {
-    /// Checks that both weights are finite and non-negative.
+impl ObjectiveSettings {
+    /// Checks σ, ε and that the weights are finite, non-negative and not both zero.
     pub fn validate(&self) -> Result<()> {
+        self.soft.validate()?;
         for (name, v) in [("lambda_iou", self.lambda_iou), ("lambda_contour", self.lambda_contour)] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::Settings(format!(
@@ -48,192 +53,312 @@ impl LossSettings {
                 )));
             }
         }
+        if self.lambda_iou + self.lambda_contour == 0.0 {
+            return Err(Error::Settings("λ1 (IoU) and λ2 (contour) cannot both be 0".into()));
+        }
         Ok(())
     }
 }
 
-/// A mask prepared as a loss target at one resolution.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MaskTarget {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// 0/1 per pixel, row-major.
-    pub mask: Vec<u8>,
-    /// Number of object pixels.
-    pub area: usize,
-    /// The contour loss's distance fields.
-    pub contour: ContourTarget,
+/// Gauss–Newton normal equations of the objective at a pose (θ order `[ω, t, ls]`).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct NormalEquations {
+    /// The curvature model `Σ c_p·J_p J_pᵀ` (9×9, symmetric), `jtj[i][j]`.
+    pub jtj: [[f64; POSE_DIM]; POSE_DIM],
+    /// The exact gradient of the loss.
+    pub jtr: [f64; POSE_DIM],
+    /// The loss.
+    pub cost: f64,
 }
 
-impl MaskTarget {
-    /// Prepares `mask` (resample it first for a coarser level); `view` names it in
-    /// errors. Errors: an empty mask.
-    pub fn new(mask: &Mask, view: &str) -> Result<MaskTarget> {
-        let contour = ContourTarget::new(mask, view)?;
-        let data: Vec<u8> = mask.data.iter().map(|&v| (v != 0) as u8).collect();
-        Ok(MaskTarget {
-            width: mask.width,
-            height: mask.height,
-            area: data.iter().filter(|&&v| v != 0).count(),
-            mask: data,
-            contour,
-        })
+impl NormalEquations {
+    /// Adds `other` scaled by `weight`.
+    pub fn add_scaled(&mut self, other: &NormalEquations, weight: f64) {
+        for i in 0..POSE_DIM {
+            for j in 0..POSE_DIM {
+                self.jtj[i][j] += weight * other.jtj[i][j];
+            }
+            self.jtr[i] += weight * other.jtr[i];
+        }
+        self.cost += weight * other.cost;
     }
 }
 
-/// One evaluation of the loss.
+/// One view's share of an evaluation.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct LossValue {
+pub struct ViewValue {
     /// `λ1·iou + λ2·contour`.
     pub total: f64,
-    /// Soft IoU loss.
+    /// Soft IoU loss, in [0, 1].
     pub iou: f64,
-    /// Contour loss.
+    /// Contour term (0 when λ2 = 0 or the mask vanished at this resolution).
     pub contour: f64,
-    /// ∂total/∂θ, order `[ω0, ω1, ω2, t0, t1, t2, ls0, ls1, ls2]` (zero when not asked for).
+}
+
+/// One evaluation of the objective.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Evaluation {
+    /// The weighted mean of the views' totals.
+    pub total: f64,
+    /// Each view's values.
+    pub views: Vec<ViewValue>,
+    /// ∂total/∂θ (zero when not asked for).
     pub gradient: [f64; POSE_DIM],
 }
 
-/// One view of the objective: its camera (at the working resolution), its target and
-/// the reusable renderer and buffers. Keep one per view across iterations.
+/// The objective over a set of views at one resolution (module doc). Keep it across
+/// iterations: it holds one renderer per view and reuses their buffers.
 #[derive(Debug, Clone)]
-pub struct ViewObjective {
-    /// The view's name (for errors).
-    pub name: String,
-    /// The camera, its size that of the target.
-    pub camera: Camera,
-    /// The mask target.
-    pub target: MaskTarget,
-    /// The renderer (its silhouette is the last render).
-    pub raster: SoftRasterizer,
-    /// The last evaluation.
-    pub last: LossValue,
+pub struct Objective {
+    targets: Vec<ViewTarget>,
+    rasters: Vec<SoftRasterizer>,
+    weights: Vec<f64>,
+    settings: ObjectiveSettings,
+    bits: BitMask,
 }
 
-impl ViewObjective {
-    /// A view from its camera and mask at the same size (scale the camera with
-    /// `Camera::scaled` and the mask with `Mask::resample` for a coarser level).
-    /// Errors: size mismatch or an empty mask.
-    pub fn new(name: &str, camera: Camera, mask: &Mask) -> Result<ViewObjective> {
-        if (mask.width, mask.height) != (camera.width, camera.height) {
-            return Err(Error::View {
-                view: name.into(),
-                problem: format!(
-                    "the mask is {}×{} but the camera is {}×{}",
-                    mask.width, mask.height, camera.width, camera.height
-                ),
-            });
+/// `Σ a` over known pixels, and `Σ a` over known object pixels, of one view.
+fn iou_sums(t: &ViewTarget, alpha: &[f64]) -> (f64, f64) {
+    let (mut inter, mut sum_a) = (0.0, 0.0);
+    match &t.known {
+        None => {
+            for (&a, &m) in alpha.iter().zip(&t.mask) {
+                sum_a += a;
+                if m != 0 {
+                    inter += a;
+                }
+            }
         }
-        Ok(ViewObjective {
-            name: name.into(),
-            camera,
-            target: MaskTarget::new(mask, name)?,
-            raster: SoftRasterizer::new(),
-            last: LossValue::default(),
+        Some(k) => {
+            for ((&a, &m), &k) in alpha.iter().zip(&t.mask).zip(k) {
+                if k != 0 {
+                    sum_a += a;
+                    if m != 0 {
+                        inter += a;
+                    }
+                }
+            }
+        }
+    }
+    (inter, sum_a + t.area - inter + UNION_EPS)
+}
+
+impl Objective {
+    /// The objective of `views`, each seen through its window (`windows[i]`) at
+    /// `resolution` pixels across it.
+    ///
+    /// Errors: invalid settings, or a different number of windows and views.
+    pub fn new(views: &[View], windows: &[Window], resolution: u32, settings: ObjectiveSettings) -> Result<Objective> {
+        settings.validate()?;
+        if views.is_empty() || views.len() != windows.len() {
+            return Err(Error::Settings(format!(
+                "the objective needs one window per view and at least one view (got {} views, {} windows)",
+                views.len(),
+                windows.len()
+            )));
+        }
+        let contour = settings.lambda_contour > 0.0;
+        let targets = views
+            .iter()
+            .zip(windows)
+            .map(|(v, w)| ViewTarget::new(v, *w, resolution, contour))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Objective {
+            rasters: vec![SoftRasterizer::new(); targets.len()],
+            weights: vec![1.0; targets.len()],
+            targets,
+            settings,
+            bits: BitMask::empty(0, 0),
         })
     }
 
-    /// Renders at `pose` and evaluates the loss; with `gradient`, also back-propagates
-    /// to the 9 pose parameters (order `[ω, t, ls]`, see the module doc).
-    pub fn evaluate(
-        &mut self,
-        mesh: &Mesh,
-        pose: &Pose,
-        soft: &SoftSettings,
-        loss: &LossSettings,
-        gradient: bool,
-    ) -> Result<LossValue> {
-        loss.validate()?;
-        let t = &self.target;
-        let mut v = LossValue::default();
-        if gradient {
-            // ∂L/∂A = λ1·(I/U² − M·(1/U + I/U²)) + λ2·W: three fixed fields, one sweep.
-            let (mask, cw) = (&t.mask, t.contour.gradient());
-            let [g_all, g_mask, g_contour] =
-                self.raster
-                    .render_with_gradients(mesh, pose, &self.camera, soft, |p| [1.0, mask[p] as f64, cw[p]])?;
-            let alpha = &self.raster.silhouette().alpha;
-            let (i, u) = soft_iou_sums(alpha, mask);
-            v.iou = 1.0 - i / u;
-            v.contour = t.contour.loss(alpha);
-            let (c_all, c_mask) = (
-                loss.lambda_iou * i / (u * u),
-                -loss.lambda_iou * (1.0 / u + i / (u * u)),
-            );
-            for k in 0..POSE_DIM {
-                v.gradient[k] = c_all * g_all[k] + c_mask * g_mask[k] + loss.lambda_contour * g_contour[k];
-            }
-        } else {
-            let sil = self.raster.render(mesh, pose, &self.camera, soft)?;
-            v.iou = soft_iou_loss(&sil.alpha, &t.mask);
-            v.contour = t.contour.loss(&sil.alpha);
-        }
-        v.total = loss.lambda_iou * v.iou + loss.lambda_contour * v.contour;
-        self.last = v;
-        Ok(v)
+    /// The views' targets.
+    pub fn targets(&self) -> &[ViewTarget] {
+        &self.targets
     }
 
-    /// Renders at `pose` and adds the Gauss–Newton terms of the residuals
-    /// `r_p = A_p − M_p`, weighted by `weight / |M|` (so that views of any size count
-    /// alike), to `out`; returns the view's loss (without gradient). θ order `[ω, t, ls]`.
-    pub fn normal_equations(
-        &mut self,
-        mesh: &Mesh,
-        pose: &Pose,
-        soft: &SoftSettings,
-        loss: &LossSettings,
-        weight: f64,
-        out: &mut NormalEquations,
-    ) -> Result<LossValue> {
-        loss.validate()?;
-        let mask = &self.target.mask;
-        let w = weight / self.target.area as f64;
-        let sil = self.raster.render_with_normal_equations(
-            mesh,
-            pose,
-            &self.camera,
-            soft,
-            |p, a| a - mask[p] as f64,
-            w,
-            out,
-        )?;
-        let mut v = LossValue {
-            iou: soft_iou_loss(&sil.alpha, mask),
-            contour: self.target.contour.loss(&sil.alpha),
-            ..LossValue::default()
+    /// The settings.
+    pub fn settings(&self) -> &ObjectiveSettings {
+        &self.settings
+    }
+
+    /// Changes σ/ε (the targets stay); errors on invalid values.
+    pub fn set_soft(&mut self, soft: SoftSettings) -> Result<()> {
+        soft.validate()?;
+        self.settings.soft = soft;
+        Ok(())
+    }
+
+    /// The views' weights in the mean (all 1 by default).
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// Sets the views' weights in the mean (non-negative, not all zero; one per view).
+    pub fn set_weights(&mut self, weights: &[f64]) -> Result<()> {
+        if weights.len() != self.targets.len()
+            || weights.iter().any(|w| !(w.is_finite() && *w >= 0.0))
+            || weights.iter().sum::<f64>() <= 0.0
+        {
+            return Err(Error::Settings(format!(
+                "view weights must be {} non-negative numbers, not all zero",
+                self.targets.len()
+            )));
+        }
+        self.weights = weights.to_vec();
+        Ok(())
+    }
+
+    /// The last render's soft silhouette of view `i` (canvas pixels, row-major).
+    pub fn alpha(&self, i: usize) -> &[f64] {
+        &self.rasters[i].silhouette().alpha
+    }
+
+    fn norm(&self) -> f64 {
+        self.weights.iter().sum::<f64>()
+    }
+
+    fn view_value(&self, i: usize, inter: f64, union: f64) -> ViewValue {
+        let t = &self.targets[i];
+        let s = &self.settings;
+        let iou = 1.0 - inter / union;
+        let contour = match &t.contour {
+            Some(c) if s.lambda_contour > 0.0 => c.loss(self.alpha(i)),
+            _ => 0.0,
         };
-        v.total = loss.lambda_iou * v.iou + loss.lambda_contour * v.contour;
-        self.last = v;
-        Ok(v)
+        ViewValue {
+            total: s.lambda_iou * iou + s.lambda_contour * contour,
+            iou,
+            contour,
+        }
+    }
+
+    /// The objective at `pose`, without gradient.
+    pub fn value(&mut self, mesh: &Mesh, pose: &Pose) -> Result<Evaluation> {
+        let mut out = Evaluation::default();
+        for i in 0..self.targets.len() {
+            let t = &self.targets[i];
+            let sil = self.rasters[i].render(mesh, pose, &t.camera, &self.settings.soft)?;
+            let (inter, union) = iou_sums(t, &sil.alpha);
+            let v = self.view_value(i, inter, union);
+            out.total += self.weights[i] * v.total;
+            out.views.push(v);
+        }
+        out.total /= self.norm();
+        Ok(out)
+    }
+
+    /// The objective at `pose` and its exact 9-gradient, in one fused render-and-
+    /// backward sweep per view.
+    pub fn value_and_gradient(&mut self, mesh: &Mesh, pose: &Pose) -> Result<Evaluation> {
+        let mut out = Evaluation::default();
+        let norm = self.norm();
+        for i in 0..self.targets.len() {
+            let t = &self.targets[i];
+            let (mask, known) = (&t.mask, t.known.as_deref());
+            let cw = t.contour.as_ref().map(|c| c.gradient());
+            // ∂L/∂A = λ1·(−M/U + (1 − M)·I/U²) + λ2·W on known pixels: three fields,
+            // combined once the sums are known.
+            let [g_mask, g_back, g_contour] =
+                self.rasters[i].render_with_gradients(mesh, pose, &t.camera, &self.settings.soft, |p| {
+                    let k = known.map_or(1.0, |k| k[p] as f64);
+                    let m = mask[p] as f64;
+                    [m * k, (1.0 - m) * k, cw.map_or(0.0, |w| w[p])]
+                })?;
+            let (inter, union) = iou_sums(t, &self.rasters[i].silhouette().alpha);
+            let v = self.view_value(i, inter, union);
+            let s = &self.settings;
+            let (c_mask, c_back) = (-s.lambda_iou / union, s.lambda_iou * inter / (union * union));
+            let w = self.weights[i] / norm;
+            for k in 0..POSE_DIM {
+                out.gradient[k] += w * (c_mask * g_mask[k] + c_back * g_back[k] + s.lambda_contour * g_contour[k]);
+            }
+            out.total += w * v.total;
+            out.views.push(v);
+        }
+        Ok(out)
+    }
+
+    /// The objective, its exact gradient and its Gauss–Newton curvature model (module
+    /// doc) at `pose`, in one render-and-Jacobian sweep per view.
+    pub fn normal_equations(&mut self, mesh: &Mesh, pose: &Pose) -> Result<(Evaluation, NormalEquations)> {
+        let mut ev = Evaluation::default();
+        let mut ne = NormalEquations::default();
+        let norm = self.norm();
+        let (l1, l2) = (self.settings.lambda_iou, self.settings.lambda_contour);
+        for i in 0..self.targets.len() {
+            let t = &self.targets[i];
+            let contour = t.contour.as_ref().filter(|_| l2 > 0.0);
+            let mut g = [[0.0f64; POSE_DIM]; 3];
+            let mut h_iou = [[0.0f64; POSE_DIM]; POSE_DIM];
+            let mut h_contour = [[0.0f64; POSE_DIM]; POSE_DIM];
+            self.rasters[i].render_with_jacobians(mesh, pose, &t.camera, &self.settings.soft, |p, a, j| {
+                if !t.is_known(p) {
+                    return;
+                }
+                let m = t.mask[p] as f64;
+                let f = if m != 0.0 { 0 } else { 1 };
+                for k in 0..POSE_DIM {
+                    g[f][k] += j[k];
+                }
+                // IRLS weight of |A − M| (the 1/U factor is applied below).
+                let c = 0.5 / (a - m).abs().max(1e-12);
+                accumulate(&mut h_iou, j, c);
+                if let Some(ct) = contour {
+                    let w = ct.gradient()[p];
+                    for k in 0..POSE_DIM {
+                        g[2][k] += w * j[k];
+                    }
+                    let c = 0.5 * w * w / ct.pixel_loss(p, a).max(1e-300);
+                    accumulate(&mut h_contour, j, c);
+                }
+            })?;
+            let (inter, union) = iou_sums(t, &self.rasters[i].silhouette().alpha);
+            let v = self.view_value(i, inter, union);
+            let w = self.weights[i] / norm;
+            let (c_mask, c_back) = (-l1 / union, l1 * inter / (union * union));
+            for a in 0..POSE_DIM {
+                ne.jtr[a] += w * (c_mask * g[0][a] + c_back * g[1][a] + l2 * g[2][a]);
+                for b in a..POSE_DIM {
+                    let hv = w * (l1 / union * h_iou[a][b] + l2 * h_contour[a][b]);
+                    ne.jtj[a][b] += hv;
+                    if b != a {
+                        ne.jtj[b][a] += hv;
+                    }
+                }
+            }
+            ev.total += w * v.total;
+            ev.views.push(v);
+        }
+        ne.cost = ev.total;
+        ev.gradient = ne.jtr;
+        Ok((ev, ne))
+    }
+
+    /// Hard IoU per view (over known pixels) of `mesh` at `pose`.
+    pub fn hard_ious(&mut self, mesh: &Mesh, pose: &Pose) -> Vec<f64> {
+        let mut bits = std::mem::replace(&mut self.bits, BitMask::empty(0, 0));
+        let out = self
+            .targets
+            .iter()
+            .map(|t| {
+                let proj = project_mesh(mesh, pose, &t.camera);
+                render_bits_into(&proj, &mesh.triangles, &t.camera, &mut bits);
+                t.hard_iou(&bits)
+            })
+            .collect();
+        self.bits = bits;
+        out
     }
 }
 
-/// The mean over `views` of the loss (and, with `gradient`, of its 9-gradient) at
-/// `pose`; each view's own value is left in its `last`. Errors: no views, or any
-/// view's error.
-pub fn evaluate_views(
-    views: &mut [ViewObjective],
-    mesh: &Mesh,
-    pose: &Pose,
-    soft: &SoftSettings,
-    loss: &LossSettings,
-    gradient: bool,
-) -> Result<LossValue> {
-    if views.is_empty() {
-        return Err(Error::Settings("the objective needs at least one view".into()));
-    }
-    let mut mean = LossValue::default();
-    let k = 1.0 / views.len() as f64;
-    for v in views.iter_mut() {
-        let l = v.evaluate(mesh, pose, soft, loss, gradient)?;
-        mean.total += k * l.total;
-        mean.iou += k * l.iou;
-        mean.contour += k * l.contour;
-        for (m, g) in mean.gradient.iter_mut().zip(l.gradient) {
-            *m += k * g;
+/// `h += c·j jᵀ` on the upper triangle.
+#[inline(always)]
+fn accumulate(h: &mut [[f64; POSE_DIM]; POSE_DIM], j: &[f64; POSE_DIM], c: f64) {
+    for a in 0..POSE_DIM {
+        let ca = c * j[a];
+        for b in a..POSE_DIM {
+            h[a][b] += ca * j[b];
         }
     }
-    Ok(mean)
 }

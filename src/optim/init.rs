@@ -15,13 +15,13 @@ pub fn triangulate_centre(views: &[View], fallback_depth: impl Fn(&View) -> f64)
     let mut b = DVec3::ZERO;
     let mut rays = Vec::with_capacity(views.len());
     for v in views {
-        let c = v.mask.centroid().ok_or_else(|| Error::Mask {
-            view: v.name.clone(),
+        let c = v.mask().centroid().ok_or_else(|| Error::EmptyMask {
+            view: v.name().to_string(),
             file: "mask".into(),
-            problem: "is empty: no pixel is marked as object".into(),
+            ignored: false,
         })?;
-        let o = v.camera.centre();
-        let d = v.camera.ray_direction(c.x, c.y);
+        let o = v.camera().centre();
+        let d = v.camera().ray_direction(c.x, c.y);
         let p = DMat3::IDENTITY - DMat3::from_cols(d * d.x, d * d.y, d * d.z);
         a += p;
         b += p * o;
@@ -41,7 +41,7 @@ pub fn triangulate_centre(views: &[View], fallback_depth: impl Fn(&View) -> f64)
     for (v, (o, d)) in views.iter().zip(rays) {
         let z = fallback_depth(v);
         // Depth is along the optical axis; convert to distance along the ray.
-        let axis = v.camera.rotation.transpose() * DVec3::Z;
+        let axis = v.camera().rotation.transpose() * DVec3::Z;
         sum += o + d * (z / d.dot(axis).max(1e-6));
     }
     Ok(sum / n)
@@ -66,12 +66,12 @@ pub fn scale_from_areas(views: &[View], centre: DVec3, mean_projected_area: f64)
     let mut acc = 0.0;
     let mut n = 0.0;
     for v in views {
-        let z = v.camera.to_camera(centre).z;
+        let (cam, area) = (v.camera(), v.known_area() as f64);
+        let z = cam.to_camera(centre).z;
         if z <= 0.0 {
             continue;
         }
-        let area = v.mask.area() as f64;
-        acc += (area * z * z / (v.camera.fx * v.camera.fy * mean_projected_area.max(1e-300))).sqrt();
+        acc += (area * z * z / (cam.fx * cam.fy * mean_projected_area.max(1e-300))).sqrt();
         n += 1.0;
     }
     if n > 0.0 && acc.is_finite() && acc > 0.0 {

@@ -1,13 +1,13 @@
-//! Levenberg–Marquardt on the per-pixel residuals `r_p = A_p − M_p` (SPEC §4
-//! "Parameters and optimiser"): the soft rasteriser accumulates the 9×9 normal
-//! equations `JᵀJ`, `Jᵀr` while it walks the pixels; a step solves
+//! Levenberg–Marquardt on the objective's Gauss–Newton model (SPEC §4 "Parameters
+//! and optimiser"; [`crate::loss::objective`]): the objective accumulates the 9×9
+//! curvature `JᵀJ` and the exact gradient `Jᵀr` while it walks the pixels; a step solves
 //! `(JᵀJ + λ·diag(JᵀJ)) δ = −Jᵀr` in the scaled parameters (see
 //! [`crate::optim::params`]), restricted to the free parameters of the scale mode.
 //! One rasterisation per iteration: a rejected step re-solves from the stored
 //! equations of the last accepted pose with a larger λ.
 
+use crate::loss::objective::NormalEquations;
 use crate::pose::Pose;
-use crate::raster::soft_backward::NormalEquations;
 
 /// The LM state between iterations.
 #[derive(Debug, Clone)]

@@ -1,18 +1,30 @@
 //! Projection of a posed mesh into a view: model → world (pose) → camera (OpenCV)
-//! → pixels (SPEC §2). Shared by the hard and soft rasterisers.
+//! → pixels (SPEC §2). The one projection of the crate: the hard, SoftRas and edge
+//! rasterisers all take a [`Projected`] mesh, and the soft ones' backward passes use
+//! the Jacobians kept by a [`PoseProjection`] to chain pixel gradients to the 9 pose
+//! parameters.
+//!
+//! Chain rule (pose-gradient order `[ω0, ω1, ω2, t0, t1, t2, ls0, ls1, ls2]`, ω the
+//! right tangent `R·exp([ω]×)`, ls the log scale): with `y = s ⊙ X_o`,
+//! `X_c = R_wc·(R·y + t) + t_wc` and `h = (R_wc·R)ᵀ·∂L/∂X_c`,
+//! `∂L/∂ω = Σ y × h`, `∂L/∂t = R·Σ h`, `∂L/∂ls = Σ y ⊙ h`.
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::pose::Pose;
-use glam::{DVec2, DVec3};
+use glam::{DMat3, DVec2, DVec3};
+use wide::f64x2;
+
+/// Number of pose parameters.
+pub const POSE_DIM: usize = 9;
 
 /// A mesh's vertices in one camera.
 #[derive(Debug, Clone, Default)]
 pub struct Projected {
     /// Camera-frame positions (OpenCV axes).
     pub cam: Vec<DVec3>,
-    /// Pixel coordinates; meaningful only where `cam[i].z >= near`.
+    /// Pixel coordinates; NaN where `cam[i].z < near`.
     pub uv: Vec<DVec2>,
     /// The near-plane depth used: points closer than this are "behind" the camera.
     pub near: f64,
@@ -26,35 +38,23 @@ impl Projected {
     }
 }
 
-/// The near-plane depth for a camera: a tiny fraction of the focal length's pixel
-/// footprint, so that only points essentially at or behind the camera centre are cut.
+/// The near-plane depth for an object of this extent: a tiny fraction of it, so
+/// that only points essentially at or behind the camera centre are cut.
 pub fn near_plane(mesh_extent: f64) -> f64 {
     (mesh_extent * 1e-4).max(1e-9)
 }
 
+/// The near plane for `mesh` under a pose of scale `scale`.
+fn near_for(mesh: &Mesh, scale: DVec3) -> f64 {
+    let extent = mesh.bounds().map(|b| (b.size() * scale.abs()).length()).unwrap_or(1.0);
+    near_plane(extent)
+}
+
 /// Projects every vertex of `mesh` under `pose` into `camera`.
 pub fn project_mesh(mesh: &Mesh, pose: &Pose, camera: &Camera) -> Projected {
-    let cam: Vec<DVec3> = mesh
-        .positions
-        .iter()
-        .map(|p| camera.to_camera(pose.apply(*p)))
-        .collect();
-    let extent = mesh
-        .bounds()
-        .map(|b| (b.size() * pose.scale.abs()).length())
-        .unwrap_or(1.0);
-    let near = near_plane(extent);
-    let uv = cam
-        .iter()
-        .map(|c| {
-            if c.z >= near {
-                camera.project(*c)
-            } else {
-                DVec2::splat(f64::NAN)
-            }
-        })
-        .collect();
-    Projected { cam, uv, near }
+    let mut p = PoseProjection::default();
+    p.project(mesh, pose, camera, false);
+    p.proj
 }
 
 /// An error naming `view` unless at least one vertex is in front of the camera.
@@ -66,4 +66,191 @@ pub fn check_visible(view: &str, proj: &Projected) -> Result<()> {
         });
     }
     Ok(())
+}
+
+/// A projection that keeps what the backward passes need: the scaled model points,
+/// the projection Jacobians and the pose. Reusable across iterations (buffers kept).
+#[derive(Debug, Clone, Default)]
+pub struct PoseProjection {
+    /// Camera points, pixels, near plane.
+    pub proj: Projected,
+    /// `s ⊙ X_o` per vertex (empty for [`PoseProjection::from_camera_points`]).
+    scaled: Vec<DVec3>,
+    /// `∂(u, v)/∂(x, y, z)` per vertex (zero behind the near plane).
+    jac: Vec<[DVec3; 2]>,
+    pose: Pose,
+    camera_rotation: DMat3,
+}
+
+impl PoseProjection {
+    /// Projects `mesh` at `pose` into `camera`; with `jacobians`, also keeps what
+    /// [`PoseProjection::pose_gradient`] and [`PoseProjection::vertex_pose_jacobians`] need.
+    pub fn project(&mut self, mesh: &Mesh, pose: &Pose, camera: &Camera, jacobians: bool) {
+        let m = camera.rotation * pose.rotation;
+        let b = camera.rotation * pose.translation + camera.translation;
+        self.scaled.clear();
+        self.scaled.extend(mesh.positions.iter().map(|p| pose.scale * *p));
+        self.proj.cam.clear();
+        self.proj.cam.extend(self.scaled.iter().map(|y| m * *y + b));
+        self.pose = *pose;
+        self.camera_rotation = camera.rotation;
+        self.finish(near_for(mesh, pose.scale), camera, jacobians);
+    }
+
+    /// A projection of given camera-frame points (the camera stage on its own; the
+    /// pose chain is then unavailable: [`PoseProjection::camera_gradient`] only).
+    pub fn from_camera_points(&mut self, cam: &[DVec3], near: f64, camera: &Camera) {
+        self.scaled.clear();
+        self.proj.cam.clear();
+        self.proj.cam.extend_from_slice(cam);
+        self.pose = Pose::IDENTITY;
+        self.camera_rotation = camera.rotation;
+        self.finish(near, camera, true);
+    }
+
+    fn finish(&mut self, near: f64, camera: &Camera, jacobians: bool) {
+        self.proj.near = near;
+        self.proj.uv.clear();
+        self.jac.clear();
+        for c in &self.proj.cam {
+            if c.z >= near {
+                let (uv, j) = camera.project_with_jacobian(*c);
+                self.proj.uv.push(uv);
+                if jacobians {
+                    self.jac.push(j);
+                }
+            } else {
+                self.proj.uv.push(DVec2::splat(f64::NAN));
+                if jacobians {
+                    self.jac.push([DVec3::ZERO; 2]);
+                }
+            }
+        }
+    }
+
+    /// Pixel positions (NaN behind the near plane).
+    pub fn uv(&self) -> &[DVec2] {
+        &self.proj.uv
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.proj.cam.len()
+    }
+
+    /// Whether there are no vertices.
+    pub fn is_empty(&self) -> bool {
+        self.proj.cam.is_empty()
+    }
+
+    /// ∂L/∂X_c of vertex `i` from its ∂L/∂(u, v).
+    #[inline]
+    pub fn camera_gradient(&self, i: usize, g: DVec2) -> DVec3 {
+        let j = &self.jac[i];
+        j[0] * g.x + j[1] * g.y
+    }
+
+    /// Chains per-vertex ∂L/∂(u, v) (`grad_uv(i)`) through the projection and the
+    /// pose to `[ω, t, ls]` (module doc). Needs a [`PoseProjection::project`] with
+    /// Jacobians.
+    pub fn pose_gradient(&self, grad_uv: impl Fn(usize) -> DVec2) -> [f64; POSE_DIM] {
+        let q = (self.camera_rotation * self.pose.rotation).transpose();
+        let (mut gw, mut gt, mut gs) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+        for (i, (y, j)) in self.scaled.iter().zip(&self.jac).enumerate() {
+            let g = grad_uv(i);
+            if g == DVec2::ZERO {
+                continue;
+            }
+            let h = q * (j[0] * g.x + j[1] * g.y);
+            gw += y.cross(h);
+            gt += h;
+            gs += *y * h;
+        }
+        let gt = self.pose.rotation * gt;
+        [gw.x, gw.y, gw.z, gt.x, gt.y, gt.z, gs.x, gs.y, gs.z]
+    }
+
+    /// `∂(u, v)/∂θ` of every vertex (rows u, v; the 9 columns `[ω, t, ls]` in lane
+    /// pairs, the 10th zero), written into `out`.
+    pub fn vertex_pose_jacobians(&self, out: &mut Vec<[[f64x2; 5]; 2]>) {
+        let r = self.pose.rotation;
+        let rc = self.camera_rotation;
+        let m = rc * r;
+        out.clear();
+        for (y, j) in self.scaled.iter().zip(&self.jac) {
+            let mut rows = [[0.0; 10]; 2];
+            for k in 0..3 {
+                let mut e = DVec3::ZERO;
+                e[k] = 1.0;
+                let cols = [m * e.cross(*y), rc * e, m * (e * *y)];
+                for (g, col) in cols.iter().enumerate() {
+                    rows[0][3 * g + k] = j[0].dot(*col);
+                    rows[1][3 * g + k] = j[1].dot(*col);
+                }
+            }
+            out.push(rows.map(|r| std::array::from_fn(|c| f64x2::new([r[2 * c], r[2 * c + 1]]))));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::so3;
+
+    #[test]
+    fn pose_gradient_matches_central_differences_of_the_pixels() {
+        // L = Σ w_i·(u_i, v_i): its pose gradient from the chain rule vs differences.
+        let mesh = crate::synth::blob_mesh(4, 6);
+        let camera = Camera::look_at(DVec3::new(0.3, -0.2, -4.0), DVec3::ZERO, DVec3::Y, 64, 48, 60.0);
+        let pose = Pose {
+            rotation: so3::exp(DVec3::new(0.3, 0.1, -0.2)),
+            translation: DVec3::new(0.1, -0.05, 0.2),
+            scale: DVec3::new(1.1, 0.9, 1.05),
+        };
+        let w: Vec<DVec2> = (0..mesh.positions.len())
+            .map(|i| DVec2::new((i as f64 * 0.7).sin(), (i as f64 * 1.3).cos()))
+            .collect();
+        let loss = |p: &Pose| -> f64 {
+            let pr = project_mesh(&mesh, p, &camera);
+            pr.uv.iter().zip(&w).map(|(uv, w)| uv.dot(*w)).sum()
+        };
+        let mut pp = PoseProjection::default();
+        pp.project(&mesh, &pose, &camera, true);
+        let g = pp.pose_gradient(|i| w[i]);
+        let mut jac = Vec::new();
+        pp.vertex_pose_jacobians(&mut jac);
+        let h = 1e-6;
+        for k in 0..POSE_DIM {
+            let mut e = DVec3::ZERO;
+            e[k % 3] = h;
+            let step = |sgn: f64| match k / 3 {
+                0 => Pose {
+                    rotation: pose.rotation * so3::exp(e * sgn),
+                    ..pose
+                },
+                1 => Pose {
+                    translation: pose.translation + e * sgn,
+                    ..pose
+                },
+                _ => Pose {
+                    scale: pose.scale * (e * sgn).exp(),
+                    ..pose
+                },
+            };
+            let fd = (loss(&step(1.0)) - loss(&step(-1.0))) / (2.0 * h);
+            assert!(
+                (fd - g[k]).abs() < 1e-5 * g[k].abs().max(1.0),
+                "parameter {k}: {} vs {fd}",
+                g[k]
+            );
+            // The forward-mode Jacobians give the same directional derivative.
+            let fwd: f64 = jac
+                .iter()
+                .zip(&w)
+                .map(|(rows, w)| w.x * rows[0][k / 2].to_array()[k % 2] + w.y * rows[1][k / 2].to_array()[k % 2])
+                .sum();
+            assert!((fwd - g[k]).abs() < 1e-9 * g[k].abs().max(1.0));
+        }
+    }
 }

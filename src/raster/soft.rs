@@ -6,8 +6,8 @@
 //! `A(p) = 1 − Π_j (1 − D_j(p))`; σ is in pixel². This is PyTorch3D's
 //! `SoftSilhouetteShader` (`sigmoid_alpha_blend`) with σ converted from NDC² to px².
 //!
-//! Stages: pose → camera-frame points → pixels ([`SoftRasterizer::render`]), then the
-//! 2-D stage [`SoftSilhouette::render_2d`]. The backward pass is in `soft_backward.rs`.
+//! Stages: pose → camera-frame points → pixels (`raster::project`, through
+//! [`SoftRasterizer::render`]), then the 2-D stage [`SoftSilhouette::render_2d`]. The backward pass is in `soft_backward.rs`.
 //!
 //! Rules (all documented on the constants below): outside pairs with
 //! `d² ≥ σ·ln(1/ε − 1)` (so `D_j < ε`) are skipped; triangles whose doubled projected
@@ -29,22 +29,10 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::pose::Pose;
-use crate::raster::project::near_plane;
-use crate::raster::tiles::{Bins, Record, TriSetup};
-use glam::{DMat3, DVec2, DVec3};
-
-/// Transmittance below which a pixel is saturated: `A > 1 − 1e-9`. A saturated pixel
-/// skips its remaining triangles in the forward pass and is skipped by the backward
-/// pass. Effect on accuracy: `A` is off by less than 1e-9, and since every
-/// `∂A/∂d_j² = δ_j·T·D_j/σ` carries the factor T, a saturated pixel's dropped gradient
-/// is below `1e-9/σ` per triangle and px² — far below the ε truncation.
-pub const SATURATION: f64 = 1e-9;
-
-/// Triangles whose doubled signed projected area |(b − a) × (c − a)| is at most this
-/// (px²) are degenerate and skipped (PyTorch3D skips |·| ≤ 1e-8 NDC², i.e.
-/// 4·10⁻⁵ px² at 128 px: the two thresholds differ only for triangles seen exactly
-/// edge-on, whose contribution is a line of zero width).
-pub const DEGENERATE_DOUBLE_AREA: f64 = 1e-8;
+use crate::raster::project::PoseProjection;
+use crate::raster::tiles::{self, Bins, Pass, Record, Tile, TriSetup};
+pub use crate::raster::tiles::{DEGENERATE_DOUBLE_AREA, SATURATION};
+use glam::{DVec2, DVec3};
 
 /// Softness of the soft silhouette.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -194,8 +182,23 @@ impl SoftSilhouette {
         Ok(())
     }
 
+    /// Runs the tile pass over the prepared geometry (see `tiles::run`), then sets
     /// `alpha = 1 − transmittance`.
-    pub(crate) fn finish(&mut self) {
+    pub(crate) fn run_pass<const REC: bool>(&mut self, on_tile: impl FnMut(&Tile)) {
+        let pass = Pass {
+            tris: &self.tris,
+            bins: &self.bins,
+            width: self.width as usize,
+            height: self.height as usize,
+            sigma: self.settings.sigma,
+            cutoff_sq: self.settings.cutoff_sq(),
+        };
+        tiles::run::<REC>(&pass, &mut self.transmittance, &mut self.records, on_tile);
+        self.finish();
+    }
+
+    /// `alpha = 1 − transmittance`.
+    fn finish(&mut self) {
         for (a, t) in self.alpha.iter_mut().zip(&self.transmittance) {
             *a = 1.0 - t;
         }
@@ -210,23 +213,14 @@ pub fn render(mesh: &Mesh, pose: &Pose, camera: &Camera, settings: &SoftSettings
     Ok(r.silhouette)
 }
 
-/// A reusable renderer for one view: holds the silhouette, the projected vertices
-/// and their Jacobians from the last render, and the gradient buffers. Keep one per
-/// view across iterations.
+/// A reusable renderer for one view: holds the silhouette, the projection of the
+/// last render (with its Jacobians) and the gradient buffers. Keep one per view
+/// across iterations.
 #[derive(Debug, Clone, Default)]
 pub struct SoftRasterizer {
     pub(crate) silhouette: SoftSilhouette,
-    /// `s ⊙ X_o` per vertex (model frame, scaled).
-    pub(crate) scaled: Vec<DVec3>,
-    /// Camera-frame vertices.
-    pub(crate) cam: Vec<DVec3>,
-    /// Pixel positions (NaN behind the near plane).
-    pub(crate) uv: Vec<DVec2>,
-    /// `∂(u, v)/∂(x, y, z)` per vertex (zero behind the near plane).
-    pub(crate) jac: Vec<[DVec3; 2]>,
-    /// The pose and camera rotation of the last render (for the chain rule).
-    pub(crate) pose: Pose,
-    pub(crate) camera_rotation: DMat3,
+    /// The projection of the last render.
+    pub(crate) projection: PoseProjection,
     /// Gradient buffers: ∂L/∂(u, v) and ∂L/∂X_c of the last backward call, and the
     /// per-field vertex gradients of the fused pass.
     pub(crate) grad_uv: Vec<DVec2>,
@@ -250,12 +244,12 @@ impl SoftRasterizer {
 
     /// Pixel positions of the vertices in the last render (NaN behind the near plane).
     pub fn uv(&self) -> &[DVec2] {
-        &self.uv
+        self.projection.uv()
     }
 
     /// Camera-frame vertices of the last render.
     pub fn camera_points(&self) -> &[DVec3] {
-        &self.cam
+        &self.projection.proj.cam
     }
 
     /// Renders `mesh` at `pose` in `camera` (size `camera.width`×`camera.height`).
@@ -274,8 +268,7 @@ impl SoftRasterizer {
 
     /// The camera stage on its own: renders camera-frame vertices `cam` (vertices
     /// with `z < near` are behind the camera and their triangles skipped). The pose
-    /// used by [`SoftRasterizer::backward`] is not updated; use
-    /// [`SoftRasterizer::backward_camera_frame`] after this.
+    /// chain is then unavailable; use [`SoftRasterizer::backward_camera_frame`] after this.
     pub fn render_camera_frame(
         &mut self,
         cam: &[DVec3],
@@ -284,56 +277,27 @@ impl SoftRasterizer {
         camera: &Camera,
         settings: &SoftSettings,
     ) -> Result<&SoftSilhouette> {
-        self.cam.clear();
-        self.cam.extend_from_slice(cam);
-        self.project_and_prepare(near, triangles, camera, settings)?;
+        self.projection.from_camera_points(cam, near, camera);
+        self.silhouette
+            .prepare(self.projection.uv(), triangles, camera.width, camera.height, settings)?;
         self.forward();
         Ok(&self.silhouette)
     }
 
     /// Projects the posed mesh and prepares the 2-D stage (no tile pass).
     pub(crate) fn prepare(&mut self, mesh: &Mesh, pose: &Pose, camera: &Camera, settings: &SoftSettings) -> Result<()> {
-        let m = camera.rotation * pose.rotation;
-        let b = camera.rotation * pose.translation + camera.translation;
-        self.scaled.clear();
-        self.scaled.extend(mesh.positions.iter().map(|p| pose.scale * *p));
-        self.cam.clear();
-        self.cam.extend(self.scaled.iter().map(|y| m * *y + b));
-        let extent = mesh
-            .bounds()
-            .map(|bb| (bb.size() * pose.scale.abs()).length())
-            .unwrap_or(1.0);
-        self.pose = *pose;
-        self.camera_rotation = camera.rotation;
-        self.project_and_prepare(near_plane(extent), &mesh.triangles, camera, settings)
+        self.projection.project(mesh, pose, camera, true);
+        self.silhouette.prepare(
+            self.projection.uv(),
+            &mesh.triangles,
+            camera.width,
+            camera.height,
+            settings,
+        )
     }
 
     /// The forward tile pass over the prepared geometry.
     pub(crate) fn forward(&mut self) {
         self.silhouette.run_pass::<false>(|_| {});
-    }
-
-    /// Projects `self.cam` and prepares the 2-D stage.
-    fn project_and_prepare(
-        &mut self,
-        near: f64,
-        triangles: &[[u32; 3]],
-        camera: &Camera,
-        settings: &SoftSettings,
-    ) -> Result<()> {
-        self.uv.clear();
-        self.jac.clear();
-        for c in &self.cam {
-            if c.z >= near {
-                let (uv, j) = camera.project_with_jacobian(*c);
-                self.uv.push(uv);
-                self.jac.push(j);
-            } else {
-                self.uv.push(DVec2::splat(f64::NAN));
-                self.jac.push([DVec3::ZERO; 2]);
-            }
-        }
-        self.silhouette
-            .prepare(&self.uv, triangles, camera.width, camera.height, settings)
     }
 }

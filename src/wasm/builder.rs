@@ -5,12 +5,11 @@
 use super::{json_text, FileSet, Session};
 use crate::camera::{Camera, CameraJson};
 use crate::error::{Error, Result};
-use crate::io::mask::{decode_image, decode_mask, mask_from_rgba};
-use crate::io::scene::check_mask;
+use crate::io::mask::{decode_image_sized, decode_mask_sized, mask_from_rgba};
 use crate::mask::Mask;
 use crate::mesh::Mesh;
 use crate::pose::{Pose, PoseJson};
-use crate::view::{Rgba, View};
+use crate::view::{Rgba, View, ViewSources};
 use wasm_bindgen::prelude::*;
 
 /// Builds a [`Session`] from a mesh and views given one by one; each call checks its
@@ -42,12 +41,10 @@ fn parse_pose(what: &str, pose: &JsValue) -> Result<Pose> {
 }
 
 fn rgba(view: &str, what: &str, width: u32, height: u32, data: Vec<u8>) -> Result<Rgba> {
-    if data.len() as u64 != 4 * width as u64 * height as u64 {
-        let problem = format!(
-            "has {} bytes, but {width}×{height} RGBA pixels need {}",
-            data.len(),
-            4 * width * height
-        );
+    // u64: `width` and `height` come from JavaScript and may be anything.
+    let need = 4 * width as u64 * height as u64;
+    if data.len() as u64 != need {
+        let problem = format!("has {} bytes, but {width}×{height} RGBA pixels need {need}", data.len());
         return Err(match what {
             "mask" => Error::Mask {
                 view: view.into(),
@@ -90,9 +87,18 @@ impl SessionBuilder {
         image_png: Option<Vec<u8>>,
     ) -> Result<(), JsError> {
         let camera = parse_camera(name, &camera)?;
-        let mask = decode_mask(mask_png, name, "mask PNG")?;
-        let image = image_png.map(|b| decode_image(&b, name, "image PNG")).transpose()?;
-        self.push_view(name, camera, mask, image)?;
+        let (w, h) = (camera.width, camera.height);
+        let mask = decode_mask_sized(mask_png, name, "mask PNG", w, h)?;
+        let image = image_png
+            .map(|b| decode_image_sized(&b, name, "image PNG", w, h))
+            .transpose()?;
+        self.push_view(
+            name,
+            camera,
+            mask,
+            image,
+            ViewSources::files("mask PNG", "", "image PNG"),
+        )?;
         Ok(())
     }
 
@@ -112,7 +118,13 @@ impl SessionBuilder {
         let camera = parse_camera(name, &camera)?;
         let mask = mask_from_rgba(&rgba(name, "mask", width, height, mask_rgba)?);
         let image = image_rgba.map(|d| rgba(name, "image", width, height, d)).transpose()?;
-        self.push_view(name, camera, mask, image)?;
+        self.push_view(
+            name,
+            camera,
+            mask,
+            image,
+            ViewSources::files("RGBA pixels", "", "RGBA pixels"),
+        )?;
         Ok(())
     }
 
@@ -146,29 +158,18 @@ impl SessionBuilder {
 }
 
 impl SessionBuilder {
-    fn push_view(&mut self, name: &str, camera: Camera, mask: Mask, image: Option<Rgba>) -> Result<()> {
-        if self.views.iter().any(|v| v.name == name) {
+    fn push_view(
+        &mut self,
+        name: &str,
+        camera: Camera,
+        mask: Mask,
+        image: Option<Rgba>,
+        sources: ViewSources,
+    ) -> Result<()> {
+        if self.views.iter().any(|v| v.name() == name) {
             return Err(Error::Settings(format!("two views are named '{name}'")));
         }
-        check_mask(name, "mask", &mask, camera.width, camera.height)?;
-        if let Some(img) = &image {
-            if (img.width, img.height) != (camera.width, camera.height) {
-                return Err(Error::Image {
-                    view: name.into(),
-                    file: "image".into(),
-                    problem: format!(
-                        "is {}×{} but the camera is {}×{}",
-                        img.width, img.height, camera.width, camera.height
-                    ),
-                });
-            }
-        }
-        self.views.push(View {
-            name: name.into(),
-            camera,
-            mask,
-            image,
-        });
+        self.views.push(View::new(name, camera, mask, None, image, &sources)?);
         Ok(())
     }
 }

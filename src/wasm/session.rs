@@ -79,14 +79,14 @@ impl Session {
     }
 
     /// One step, recording the loss when an optimiser iteration was done.
-    fn step_once(&mut self) -> Progress {
-        let p = self.est.step();
+    fn step_once(&mut self) -> Result<Progress> {
+        let p = self.est.step()?;
         if p.iteration > self.iteration {
             self.iteration = p.iteration;
             self.losses.push(p.loss);
         }
         self.rendered = None;
-        p
+        Ok(p)
     }
 
     /// The full-resolution silhouettes at the current pose (rendered once per step).
@@ -96,7 +96,7 @@ impl Session {
             let pose = est.pose();
             est.views()
                 .iter()
-                .map(|v| raster::hard::render(est.mesh(), &pose, &v.camera))
+                .map(|v| raster::hard::render(est.mesh(), &pose, v.camera()))
                 .collect()
         })
     }
@@ -108,7 +108,7 @@ impl Session {
             .views()
             .iter()
             .zip(&rendered)
-            .map(|(v, m)| metrics::hard_iou(m, &v.mask))
+            .map(|(v, m)| metrics::hard_iou_known(m, v.mask(), v.ignore()))
             .collect()
     }
 
@@ -152,10 +152,10 @@ impl Session {
             .views()
             .iter()
             .map(|v| ViewInfo {
-                name: &v.name,
-                width: v.camera.width,
-                height: v.camera.height,
-                has_image: v.image.is_some(),
+                name: v.name(),
+                width: v.camera().width,
+                height: v.camera().height,
+                has_image: v.image().is_some(),
             })
             .collect();
         to_js(&info)
@@ -171,7 +171,7 @@ impl Session {
             if self.est.is_done() {
                 break;
             }
-            p = Some(self.step_once());
+            p = Some(self.step_once()?);
         }
         self.seconds += (js_sys::Date::now() - t0) / 1000.0;
         let p = p.unwrap_or_else(|| self.est.progress());
@@ -185,7 +185,7 @@ impl Session {
         let t0 = js_sys::Date::now();
         let mut p = None;
         while !self.est.is_done() {
-            p = Some(self.step_once());
+            p = Some(self.step_once()?);
             if js_sys::Date::now() - t0 >= budget_ms {
                 break;
             }
@@ -247,7 +247,7 @@ impl Session {
         let v = &self.est.views()[view];
         let mut img = overlay::overlay(v, Some(&rendered));
         // The scene's grasps, carried by the current pose into this view.
-        crate::grasp::draw_grasps(&mut img, &self.grasps, &self.est.pose(), &v.camera);
+        crate::grasp::draw_grasps(&mut img, &self.grasps, &self.est.pose(), v.camera());
         Ok(Clamped(img.data))
     }
 

@@ -439,7 +439,7 @@ fn importers_write_loadable_scenes() {
     .unwrap();
     assert_eq!(scene.views.len(), 6);
     for v in &scene.views {
-        assert!((v.camera.centre().length() - 4.031).abs() < 1e-3);
+        assert!((v.camera().centre().length() - 4.031).abs() < 1e-3);
     }
     let o = run(&[
         "import",
@@ -476,5 +476,99 @@ fn importers_write_loadable_scenes() {
             d.join("x").to_str().unwrap(),
         ]),
         &["77"],
+    );
+}
+
+/// Replaces every mask of the scene in `dir` by a thin ring around the mask's
+/// centroid: no solid object's silhouette matches a ring.
+fn make_impossible(dir: &Path) {
+    for e in std::fs::read_dir(dir.join("masks")).unwrap() {
+        let path = e.unwrap().path();
+        let img = image::open(&path).unwrap().to_luma8();
+        let (w, h) = img.dimensions();
+        let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
+        for (x, y, p) in img.enumerate_pixels() {
+            if p.0[0] >= 128 {
+                sx += x as f64;
+                sy += y as f64;
+                n += 1.0;
+            }
+        }
+        let (cx, cy) = (sx / n, sy / n);
+        let ring = image::GrayImage::from_fn(w, h, |x, y| {
+            let d = ((x as f64 - cx).powi(2) + (y as f64 - cy).powi(2)).sqrt();
+            image::Luma([if (14.0..18.0).contains(&d) { 255 } else { 0 }])
+        });
+        ring.save(&path).unwrap();
+    }
+}
+
+#[test]
+fn a_failed_fit_is_named_exits_3_when_strict_and_predicts_nothing_in_eval() {
+    let d = tmp("verdict");
+    let avocado = crate::shared("data/gltf/Avocado-kaolin/avocado.gltf");
+    for (i, seed) in ["3", "4"].iter().enumerate() {
+        let dir = d.join(format!("scenes/s{i}"));
+        let o = run(&[
+            "synth",
+            "--mesh",
+            avocado.to_str().unwrap(),
+            "--views",
+            "3",
+            "--seed",
+            seed,
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    make_impossible(&d.join("scenes/s1"));
+    let fit = |scene: &str, strict: bool| {
+        let mut args = vec![
+            "fit".to_string(),
+            d.join(format!("scenes/{scene}/scene.json")).display().to_string(),
+            "--out".into(),
+            d.join(format!("{scene}.json")).display().to_string(),
+        ];
+        if strict {
+            args.push("--strict".into());
+        }
+        let o = bin().args(&args).output().unwrap();
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join(format!("{scene}.json"))).unwrap()).unwrap();
+        (o, r)
+    };
+    let (o, r) = fit("s1", false);
+    assert_eq!(o.status.code(), Some(0), "without --strict a failed fit still exits 0");
+    assert_eq!(r["verdict"], "failed", "{}", r["views"]);
+    assert_ne!(r["termination"], "converged");
+    assert!(stderr(&o).contains("verdict failed"), "{}", stderr(&o));
+    let (o, _) = fit("s1", true);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let (o, r) = fit("s0", true);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(r["verdict"], "ok");
+    // eval: the failed scene's views are no predictions, so precision ≠ recall.
+    let out = d.join("report");
+    let o = run(&[
+        "eval",
+        d.join("scenes").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--no-views-curve",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let row = &rep["summary"]["prf"][0];
+    assert_eq!(row["ground_truths"], 6);
+    assert_eq!(row["predictions"], 3, "{row}");
+    assert!(
+        row["precision"].as_f64().unwrap() > row["recall"].as_f64().unwrap(),
+        "{row}"
     );
 }

@@ -1,13 +1,15 @@
-//! The whole pipeline: search + refinement recover known poses from no initial guess.
+//! The whole pipeline: search + refinement recover known poses from no initial guess;
+//! the verdict, the scale modes and the loss weights do what they say.
 
-use crate::fixture;
-use localisebot::estimator::{Estimator, FitSettings, Phase};
+use crate::shared;
+use localisebot::estimator::{Estimator, FitSettings, Phase, ScaleMode};
 use localisebot::metrics::pose_errors;
 use localisebot::synth::{synthesize, SynthSettings};
-use localisebot::{io, load_scene, Mesh, Pose};
+use localisebot::verdict::Verdict;
+use localisebot::{io, load_scene, Mask, Mesh, Pose, View};
 
 fn mesh(rel: &str) -> Mesh {
-    let path = fixture(rel);
+    let path = shared(&format!("data/{rel}"));
     let bytes = std::fs::read(&path).unwrap();
     let dir = path.parent().unwrap().to_path_buf();
     io::load_mesh(&path.to_string_lossy(), &bytes, &|u| std::fs::read(dir.join(u)).ok()).unwrap()
@@ -29,11 +31,13 @@ fn duck_is_found_from_no_initial_pose() {
     )
     .unwrap();
     let mut est = Estimator::new(m.clone(), s.views(), None, FitSettings::default()).unwrap();
-    let first = est.step();
+    let first = est.step().unwrap();
     assert_eq!(first.phase, Phase::Search);
-    let last = est.run(100_000);
+    let last = est.run(100_000).unwrap();
     assert_eq!(last.phase, Phase::Done);
     assert!(last.termination.is_some());
+    println!("duck IoUs {:?}", est.progress().view_iou);
+    assert_eq!(last.verdict, Some(Verdict::Ok));
     let e = pose_errors(&m, &est.pose(), &s.pose);
     println!(
         "duck: rotation {:.2}°, ADD {:.2}% of diameter, scale {:.2}%",
@@ -45,6 +49,8 @@ fn duck_is_found_from_no_initial_pose() {
     assert!(e.add_rel < 0.02, "{e:?}");
     assert!(e.scale < 0.03, "{e:?}");
     let r = est.result(1.5, Some(&s.pose));
+    assert_eq!((r.verdict, r.doubted_views.len()), (Some(Verdict::Ok), 0));
+    assert_eq!(r.symmetric, Some(false));
     assert_eq!(r.views.len(), 4);
     assert!(r.views.iter().all(|v| v.iou > 0.95), "{:?}", r.views);
     assert!(!r.loss_history.is_empty());
@@ -60,7 +66,7 @@ fn duck_is_found_from_no_initial_pose() {
 #[test]
 fn a_given_initial_pose_skips_the_search_and_is_refined() {
     // The PyTorch3D reference case: its init pose is 22° from the truth.
-    let dir = fixture("pytorch3d-case1/scene128");
+    let dir = shared("reference/pytorch3d-case1/scene128");
     let text = std::fs::read_to_string(dir.join("scene.json")).unwrap();
     let scene = load_scene(&dir.join("scene.json").to_string_lossy(), &text, &|p| {
         std::fs::read(p).ok()
@@ -76,8 +82,12 @@ fn a_given_initial_pose_skips_the_search_and_is_refined() {
         FitSettings::default(),
     )
     .unwrap();
-    assert_eq!(est.step().phase, Phase::Refine, "no search with an initial pose");
-    est.run(100_000);
+    assert_eq!(
+        est.step().unwrap().phase,
+        Phase::Refine,
+        "no search with an initial pose"
+    );
+    est.run(100_000).unwrap();
     let after = pose_errors(&scene.mesh, &est.pose(), &gt);
     println!(
         "reference case: rotation {:.2}° -> {:.2}°, ADD {:.3} -> {:.3}",
@@ -103,7 +113,7 @@ fn one_view_is_allowed() {
     )
     .unwrap();
     let mut est = Estimator::new(m, s.views(), None, FitSettings::default()).unwrap();
-    est.run(100_000);
+    est.run(100_000).unwrap();
     // One view cannot fix depth against scale, but the silhouette must match.
     let r = est.result(0.0, None);
     assert!(r.views[0].iou > 0.9, "{:?}", r.views);
@@ -111,7 +121,7 @@ fn one_view_is_allowed() {
 
 #[test]
 fn an_object_behind_a_camera_is_named() {
-    let m = mesh("gltf/Box/glTF-Binary/Box.glb");
+    let m = Mesh::cuboid(glam::DVec3::new(1.0, 0.6, 0.4));
     let s = synthesize(
         &m,
         &SynthSettings {
@@ -126,9 +136,11 @@ fn an_object_behind_a_camera_is_named() {
     .unwrap();
     let mut v = s.views();
     // Turn view1's camera around: it now looks away from the object.
-    let c = v[1].camera;
-    v[1].camera.rotation = glam::DMat3::from_diagonal(glam::DVec3::new(-1.0, 1.0, -1.0)) * c.rotation;
-    v[1].camera.translation = glam::DMat3::from_diagonal(glam::DVec3::new(-1.0, 1.0, -1.0)) * c.translation;
+    let mut c = *v[1].camera();
+    let flip = glam::DMat3::from_diagonal(glam::DVec3::new(-1.0, 1.0, -1.0));
+    c.rotation = flip * c.rotation;
+    c.translation = flip * c.translation;
+    v[1] = v[1].with_camera(c).unwrap();
     let e = Estimator::new(m.clone(), v.clone(), None, FitSettings::default())
         .err()
         .expect("must fail");
@@ -164,7 +176,10 @@ fn bad_settings_are_refused() {
 
 #[test]
 fn the_search_ranks_the_true_orientation_first_and_refits_translation_and_scale() {
-    use localisebot::optim::search::{low_res_views, score_candidate};
+    use localisebot::loss::objective::{Objective, ObjectiveSettings};
+    use localisebot::loss::target::{Window, WindowMode};
+    use localisebot::optim::search::score_candidate;
+    use localisebot::raster::hard::BitMask;
     let m = mesh("gltf/Duck/glTF-Binary/Duck.glb");
     let s = synthesize(
         &m,
@@ -178,29 +193,42 @@ fn the_search_ranks_the_true_orientation_first_and_refits_translation_and_scale(
         None,
     )
     .unwrap();
-    let low = low_res_views(&s.views(), 64);
-    let centre = m.bounds().unwrap().centre();
-    // The true rotation, but translation and scale off: the re-fit brings them back.
-    let mut start = s.pose;
-    start.translation += glam::DVec3::splat(0.05);
-    start.scale *= 1.2;
-    let right = score_candidate(&m, &low, start, centre, 2);
-    let off = Pose {
-        rotation: s.pose.rotation * glam::DMat3::from_rotation_x(1.6),
-        ..start
-    };
-    let wrong = score_candidate(&m, &low, off, centre, 2);
-    assert!(
-        right.score > 0.9 && right.score > wrong.score + 0.1,
-        "{} vs {}",
-        right.score,
-        wrong.score
-    );
-    assert!(
-        (right.pose.scale.x / s.pose.scale.x - 1.0).abs() < 0.1,
-        "{:?}",
-        right.pose.scale
-    );
+    let views = s.views();
+    for mode in [WindowMode::Full, WindowMode::Object { margin: 0.3 }] {
+        let windows: Vec<Window> = views.iter().map(|v| Window::for_view(v, mode)).collect();
+        let settings = ObjectiveSettings {
+            soft: Default::default(),
+            lambda_iou: 1.0,
+            lambda_contour: 0.0,
+        };
+        let objective = Objective::new(&views, &windows, 64, settings).unwrap();
+        let centre = m.bounds().unwrap().centre();
+        let mut bits = BitMask::empty(0, 0);
+        // The true rotation, but translation and scale off: the re-fit brings them back.
+        let mut start = s.pose;
+        start.translation += glam::DVec3::splat(0.05);
+        start.scale *= 1.2;
+        let right = score_candidate(&m, objective.targets(), start, centre, 2, true, &mut bits);
+        let off = Pose {
+            rotation: s.pose.rotation * glam::DMat3::from_rotation_x(1.6),
+            ..start
+        };
+        let wrong = score_candidate(&m, objective.targets(), off, centre, 2, true, &mut bits);
+        assert!(
+            right.score > 0.9 && right.score > wrong.score + 0.1,
+            "{mode:?}: {} vs {}",
+            right.score,
+            wrong.score
+        );
+        assert!(
+            (right.pose.scale.x / s.pose.scale.x - 1.0).abs() < 0.1,
+            "{:?}",
+            right.pose.scale
+        );
+        // Without the scale re-fit, the scale stays exactly where it was.
+        let fixed = score_candidate(&m, objective.targets(), start, centre, 2, false, &mut bits);
+        assert_eq!(fixed.pose.scale, start.scale);
+    }
 }
 
 #[test]
@@ -222,9 +250,106 @@ fn the_papers_euler_grid_search_also_finds_the_object() {
     let mut settings = FitSettings::default();
     settings.search.sampling = Sampling::EulerGrid(8);
     let mut est = Estimator::new(m.clone(), s.views(), None, settings).unwrap();
-    let p = est.step();
+    let p = est.step().unwrap();
     assert_eq!(p.search_total, 512);
-    est.run(100_000);
+    est.run(100_000).unwrap();
     let e = pose_errors(&m, &est.pose(), &s.pose);
     assert!(e.add_rel < 0.05, "{e:?}");
+}
+
+fn blob_scene(views: usize, seed: u64) -> (Mesh, localisebot::synth::SynthScene) {
+    let m = localisebot::synth::blob_mesh(12, 25);
+    let s = synthesize(
+        &m,
+        &SynthSettings {
+            views,
+            width: 96,
+            height: 96,
+            seed,
+            ..Default::default()
+        },
+        None,
+    )
+    .unwrap();
+    (m, s)
+}
+
+fn fit(m: &Mesh, views: Vec<View>, init: Option<Pose>, settings: FitSettings) -> Estimator {
+    let mut est = Estimator::new(m.clone(), views, init, settings).unwrap();
+    est.run(100_000).unwrap();
+    est
+}
+
+#[test]
+fn an_impossible_scene_fails_and_is_never_called_converged() {
+    // Every mask is a thin ring around where the object is: no solid object's
+    // silhouette covers a ring without its hole (IoU at most ring / disc ≈ 0.3).
+    let (m, s) = blob_scene(3, 31);
+    let views: Vec<View> = s
+        .views()
+        .iter()
+        .map(|v| {
+            let c = v.mask().centroid().unwrap();
+            let (w, h) = (v.mask().width, v.mask().height);
+            let mut ring = Mask::empty(w, h);
+            for y in 0..h {
+                for x in 0..w {
+                    let d = (glam::DVec2::new(x as f64, y as f64) - c).length();
+                    ring.data[(y * w + x) as usize] = u8::from((26.0..32.0).contains(&d));
+                }
+            }
+            View::new(v.name(), *v.camera(), ring, None, None, &Default::default()).unwrap()
+        })
+        .collect();
+    let est = fit(&m, views, None, FitSettings::default());
+    let r = est.result(0.0, None);
+    println!(
+        "impossible scene: IoUs {:?}, verdict {:?}",
+        r.views.iter().map(|v| v.iou).collect::<Vec<_>>(),
+        r.verdict
+    );
+    assert_eq!(r.verdict, Some(Verdict::Failed), "{:?}", r.views);
+    assert_ne!(r.termination, Some(localisebot::Termination::Converged));
+    assert!(!r.verdict_reasons.is_empty());
+}
+
+#[test]
+fn a_fixed_scale_stays_exactly_fixed() {
+    let (m, s) = blob_scene(3, 12);
+    let settings = FitSettings {
+        scale_mode: ScaleMode::Fixed,
+        ..FitSettings::default()
+    };
+    // From no initial pose the scale is 1, through the search and every stage.
+    let est = fit(&m, s.views(), None, settings.clone());
+    assert_eq!(est.pose().scale, glam::DVec3::ONE);
+    // From a given pose, its scale is kept.
+    let mut init = s.pose;
+    init.translation += glam::DVec3::splat(0.02);
+    let est = fit(&m, s.views(), Some(init), settings);
+    assert_eq!(est.pose().scale, init.scale);
+}
+
+#[test]
+fn the_contour_weight_changes_what_the_default_optimiser_minimises() {
+    let (m, s) = blob_scene(3, 14);
+    let mut init = s.pose;
+    init.rotation *= glam::DMat3::from_rotation_y(0.15);
+    init.translation += glam::DVec3::new(0.05, -0.03, 0.02);
+    let run = |l2: f64| {
+        let settings = FitSettings {
+            lambda_contour: l2,
+            ..FitSettings::default()
+        };
+        let est = fit(&m, s.views(), Some(init), settings);
+        (est.pose(), est.loss_history())
+    };
+    let (p0, h0) = run(0.0);
+    let (p1, h1) = run(1.0);
+    assert_ne!(p0, p1, "λ2 = 0 and λ2 = 1 gave the same fit");
+    // The loss the fit reports includes the contour term: larger with λ2 = 1.
+    assert!(h1[0] > h0[0], "{} vs {}", h1[0], h0[0]);
+    for p in [p0, p1] {
+        assert!(pose_errors(&m, &p, &s.pose).add_rel < 0.02);
+    }
 }

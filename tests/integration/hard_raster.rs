@@ -509,25 +509,30 @@ fn pytorch3d_reference_silhouettes() {
         let scene = localisebot::load_scene(&file.to_string_lossy(), &text, &|p| std::fs::read(p).ok()).unwrap();
         let gt = scene.ground_truth_pose.unwrap();
         for view in &scene.views {
-            let proj = project_mesh(&scene.mesh, &gt, &view.camera);
-            let got = hard::render_projected(&proj, &scene.mesh.triangles, &view.camera);
-            let diffs = differing(&got, &view.mask);
+            let proj = project_mesh(&scene.mesh, &gt, view.camera());
+            let got = hard::render_projected(&proj, &scene.mesh.triangles, view.camera());
+            let diffs = differing(&got, view.mask());
             let worst = diffs
                 .iter()
                 .map(|&p| nearest_edge(&proj, &scene.mesh.triangles, p))
                 .fold(0.0, f64::max);
             println!(
                 "pytorch3d {size} {}: area {} (reference {}), {} pixels differ, farthest {worst:.2e} px from an edge",
-                view.name,
+                view.name(),
                 got.area(),
-                view.mask.area(),
+                view.mask().area(),
                 diffs.len()
             );
-            assert!(diffs.len() <= 2, "{size} {}: {} pixels differ", view.name, diffs.len());
+            assert!(
+                diffs.len() <= 2,
+                "{size} {}: {} pixels differ",
+                view.name(),
+                diffs.len()
+            );
             assert!(
                 worst <= 2e-3,
                 "{size} {}: a differing pixel is {worst} px from an edge",
-                view.name
+                view.name()
             );
         }
     }

@@ -96,9 +96,9 @@ fn nerf_lego_six_views() {
     assert_eq!(scene.views.len(), 6);
     assert_eq!(scene.mesh.triangle_count(), 12);
     for (v, area) in scene.views.iter().zip(areas) {
-        assert_eq!(v.mask.area(), area);
-        assert_eq!(v.image.as_ref().map(|i| (i.width, i.height)), Some((800, 800)));
-        assert!((v.camera.project(v.camera.to_camera(DVec3::ZERO)) - DVec2::splat(399.5)).length() < 0.01);
+        assert_eq!(v.mask().area(), area);
+        assert_eq!(v.image().map(|i| (i.width, i.height)), Some((800, 800)));
+        assert!((v.camera().project(v.camera().to_camera(DVec3::ZERO)) - DVec2::splat(399.5)).length() < 0.01);
     }
 }
 
@@ -153,12 +153,12 @@ fn close(a: DMat4, b: DMat4, tol: f64) -> bool {
 fn assert_renders_match(scene: &Scene) {
     let gt = scene.ground_truth_pose.unwrap();
     for v in &scene.views {
-        let rendered = raster::hard::render(&scene.mesh, &gt, &v.camera);
-        let iou = metrics::hard_iou(&rendered, &v.mask);
-        assert!(iou > 0.95, "view {}: IoU {iou}", v.name);
+        let rendered = raster::hard::render(&scene.mesh, &gt, v.camera());
+        let iou = metrics::hard_iou(&rendered, v.mask());
+        assert!(iou > 0.95, "view {}: IoU {iou}", v.name());
         // The object's centre projects where BOP's own annotation puts it.
-        let c = v.camera.project(v.camera.to_camera(gt.translation));
-        assert!(v.mask.get(c.x.round() as u32, c.y.round() as u32));
+        let c = v.camera().project(v.camera().to_camera(gt.translation));
+        assert!(v.mask().get(c.x.round() as u32, c.y.round() as u32));
     }
 }
 

@@ -8,6 +8,7 @@ mod hard_raster;
 mod importers;
 mod mesh_loading;
 mod metrics;
+mod objective;
 mod soft_raster;
 
 /// Path to a file under `../shared` (the shared third-party data beside the repo).

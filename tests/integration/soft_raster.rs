@@ -1,17 +1,13 @@
-//! Soft rasteriser and losses: forward against a naive all-pairs oracle, every
-//! backward stage against central finite differences, the PyTorch3D reference case
-//! (silhouettes, losses, gradient), the loss along a path to the true pose, and
-//! (printed, not asserted) timings.
+//! The SoftRas kernel: forward against a naive all-pairs oracle, every backward
+//! stage against central finite differences. (The objective built on it — the
+//! PyTorch3D reference, loss gradients, the Gauss–Newton model — is in `objective.rs`.)
 
 use crate::fixture;
 use glam::{DVec2, DVec3};
 use localisebot::loss::contour::ContourTarget;
 use localisebot::loss::iou::{soft_iou_loss, soft_iou_loss_grad};
-use localisebot::loss::objective::{evaluate_views, LossSettings, ViewObjective};
 use localisebot::raster::soft::{render, SoftRasterizer, SoftSettings, SoftSilhouette, DEGENERATE_DOUBLE_AREA};
-use localisebot::raster::soft_backward::NormalEquations;
 use localisebot::{so3, Camera, Mask, Mesh, Pose, Scene};
-use std::path::PathBuf;
 
 // ---------------------------------------------------------------- helpers
 
@@ -23,18 +19,6 @@ fn load_case(size: u32) -> (Scene, Pose) {
     let scene = localisebot::load_scene("scene.json", &text, &resolver).unwrap();
     let init = std::fs::read_to_string(dir.join("init_pose.json")).unwrap();
     (scene, Pose::from_json_str(&init, "init_pose.json").unwrap())
-}
-
-fn reference() -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(fixture("pytorch3d-case1/reference.json")).unwrap()).unwrap()
-}
-
-fn read_f32(path: PathBuf) -> Vec<f64> {
-    std::fs::read(path)
-        .unwrap()
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
-        .collect()
 }
 
 /// The pose moved by θ = [ω, t, ls] (right rotation perturbation, log-scale).
@@ -216,9 +200,9 @@ fn soft_forward_matches_naive_oracle_on_the_blob() {
     assert!((s.sigma - 0.4096).abs() < 1e-12);
     for view in &scene.views[..2] {
         let mut r = SoftRasterizer::new();
-        let sil = r.render(&scene.mesh, &init, &view.camera, &s).unwrap().clone();
+        let sil = r.render(&scene.mesh, &init, view.camera(), &s).unwrap().clone();
         let o = naive(r.uv(), &scene.mesh.triangles, 128, 128, &s);
-        check_against_oracle(&format!("blob {}", view.name), &sil.alpha, &o, s.eps);
+        check_against_oracle(&format!("blob {}", view.name()), &sil.alpha, &o, s.eps);
     }
 }
 
@@ -392,179 +376,10 @@ fn soft_backward_pose_on_the_blob_matches_finite_differences() {
     // d² is a minimum over edges, with kinks where the closest edge changes: with
     // thousands of triangles a larger step straddles some (h = 1e-5 gives 2.5e-3,
     // 1e-6 gives 8e-4), so the step is small.
-    let (an, fd) = pose_gradients(&scene.mesh, &init, &scene.views[1].camera, &s, 17, 1e-7);
+    let (an, fd) = pose_gradients(&scene.mesh, &init, scene.views[1].camera(), &s, 17, 1e-7);
     let e = rel_err(&an, &fd);
     println!("pose gradient (blob, view1): relative error {e:.2e}");
     assert!(e < 1e-4, "{an:?}\n{fd:?}");
-}
-
-#[test]
-fn soft_losses_gradient_through_the_renderer_matches_finite_differences() {
-    let (scene, init) = load_case(128);
-    let s = fd_settings(0.4096);
-    let loss = LossSettings {
-        lambda_iou: 1.0,
-        lambda_contour: 2.0,
-    };
-    let mut views: Vec<ViewObjective> = scene
-        .views
-        .iter()
-        .map(|v| ViewObjective::new(&v.name, v.camera, &v.mask).unwrap())
-        .collect();
-    let pose = perturb(&init, &[0.05, -0.02, 0.03, 0.02, 0.01, -0.03, 0.02, -0.01, 0.0]);
-    let l = evaluate_views(&mut views, &scene.mesh, &pose, &s, &loss, true).unwrap();
-    assert!(l.iou > 0.1 && l.contour > 0.0);
-    let step = 1e-7;
-    let fd: Vec<f64> = (0..9)
-        .map(|k| {
-            let mut th = [0.0; 9];
-            th[k] = step;
-            let p = evaluate_views(&mut views, &scene.mesh, &perturb(&pose, &th), &s, &loss, false).unwrap();
-            th[k] = -step;
-            let m = evaluate_views(&mut views, &scene.mesh, &perturb(&pose, &th), &s, &loss, false).unwrap();
-            (p.total - m.total) / (2.0 * step)
-        })
-        .collect();
-    let e = rel_err(&l.gradient, &fd);
-    println!("total loss gradient: relative error {e:.2e}");
-    assert!(e < 1e-4, "{:?}\n{fd:?}", l.gradient);
-}
-
-#[test]
-fn soft_gauss_newton_terms_match_finite_difference_jacobian() {
-    let mesh = octahedron();
-    let cam = test_camera(32, 28);
-    let s = fd_settings(0.9);
-    let pose = some_pose();
-    let mut r = SoftRasterizer::new();
-    let alpha = r.render(&mesh, &pose, &cam, &s).unwrap().alpha.clone();
-    let mask: Vec<f64> = (0..alpha.len())
-        .map(|i| ((i / 32 + i % 32) % 3 == 0) as u8 as f64)
-        .collect();
-    let res: Vec<f64> = alpha.iter().zip(&mask).map(|(a, m)| a - m).collect();
-    let mut ne = NormalEquations::default();
-    r.accumulate_normal_equations(&res, 0.5, &mut ne);
-    // Finite-difference Jacobian ∂A_p/∂θ.
-    let step = 1e-6;
-    let cols: Vec<Vec<f64>> = (0..9)
-        .map(|k| {
-            let mut th = [0.0; 9];
-            th[k] = step;
-            let p = render(&mesh, &perturb(&pose, &th), &cam, &s).unwrap().alpha;
-            th[k] = -step;
-            let m = render(&mesh, &perturb(&pose, &th), &cam, &s).unwrap().alpha;
-            p.iter().zip(&m).map(|(a, b)| (a - b) / (2.0 * step)).collect()
-        })
-        .collect();
-    let mut jtj = vec![];
-    let mut jtj_fd = vec![];
-    for a in 0..9 {
-        for b in 0..9 {
-            jtj.push(ne.jtj[a][b]);
-            jtj_fd.push(0.5 * dot(&cols[a], &cols[b]));
-        }
-    }
-    let jtr_fd: Vec<f64> = (0..9).map(|a| 0.5 * dot(&cols[a], &res)).collect();
-    let (e1, e2) = (rel_err(&jtj, &jtj_fd), rel_err(&ne.jtr, &jtr_fd));
-    println!("Gauss–Newton: JᵀJ relative error {e1:.2e}, Jᵀr {e2:.2e}");
-    assert!(e1 < 1e-5 && e2 < 1e-5);
-    assert!((ne.cost - 0.25 * dot(&res, &res)).abs() < 1e-12);
-    // Jᵀr is the gradient of ½Σ w r²: the backward pass must agree.
-    let g: Vec<f64> = res.iter().map(|v| 0.5 * v).collect();
-    let grad = r.backward(&g);
-    assert!(rel_err(&grad, &ne.jtr) < 1e-9);
-}
-
-// ---------------------------------------------------------------- PyTorch3D reference
-
-#[test]
-fn soft_matches_the_pytorch3d_reference() {
-    let refj = reference();
-    for size in [128u32, 256] {
-        let r = &refj["per_res"][size.to_string()];
-        let (scene, init) = load_case(size);
-        let s = SoftSettings::from_ndc(1e-4, size, size);
-        let mut views: Vec<ViewObjective> = scene
-            .views
-            .iter()
-            .map(|v| ViewObjective::new(&v.name, v.camera, &v.mask).unwrap())
-            .collect();
-        let loss = LossSettings {
-            lambda_iou: 1.0,
-            lambda_contour: 0.0,
-        };
-        let mean = evaluate_views(&mut views, &scene.mesh, &init, &s, &loss, true).unwrap();
-        let mut worst_a = 0.0f64;
-        let mut worst_l = 0.0f64;
-        for (i, v) in views.iter().enumerate() {
-            let want = read_f32(fixture(&format!("pytorch3d-case1/soft_init_{size}_view{i}.f32")));
-            let alpha = &v.raster.silhouette().alpha;
-            let d = max_abs_diff(alpha, &want);
-            let sum: f64 = alpha.iter().sum();
-            let want_sum = r["soft_sum_init"][i].as_f64().unwrap();
-            let want_l = r["loss_init_per_view_f64"][i].as_f64().unwrap();
-            println!(
-                "{size} view{i}: max|ΔA| {d:.2e}, ΣA {sum:.3} (ref {want_sum:.3}), loss {:.8} (ref {want_l:.8})",
-                v.last.iou
-            );
-            worst_a = worst_a.max(d);
-            worst_l = worst_l.max((v.last.iou - want_l).abs());
-            assert!((sum - want_sum).abs() < 0.05, "ΣA");
-        }
-        let want_mean = r["loss_init_mean_f64"].as_f64().unwrap();
-        // Reference tangent on the left: g_left = R_init · g_right for the rotation.
-        let gl = init.rotation * DVec3::new(mean.gradient[0], mean.gradient[1], mean.gradient[2]);
-        let mut ours = mean.gradient.to_vec();
-        ours[..3].copy_from_slice(&gl.to_array());
-        let want: Vec<f64> = (0..9).map(|k| r["grad_init_f64"][k].as_f64().unwrap()).collect();
-        let ge = rel_err(&want, &ours);
-        let gabs = max_abs_diff(&want, &ours);
-        println!(
-            "{size}: max|ΔA| {worst_a:.2e}, max|Δloss| per view {worst_l:.2e}, mean loss {:.8} (ref {want_mean:.8}), \
-             gradient max abs diff {gabs:.2e}, relative {ge:.2e}\n  ours {ours:.6?}\n  ref  {want:.6?}",
-            mean.iou
-        );
-        assert!(worst_a < 1e-4, "silhouettes");
-        assert!(worst_l < 1e-4 && (mean.iou - want_mean).abs() < 1e-4, "losses");
-        assert!(ge < 1e-3, "gradient");
-    }
-}
-
-// ---------------------------------------------------------------- behaviour
-
-#[test]
-fn soft_losses_fall_along_the_path_to_the_true_pose() {
-    let (scene, init) = load_case(128);
-    let gt = scene.ground_truth_pose.unwrap();
-    let s = SoftSettings::from_ndc(1e-4, 128, 128);
-    let mut views: Vec<ViewObjective> = scene
-        .views
-        .iter()
-        .map(|v| ViewObjective::new(&v.name, v.camera, &v.mask).unwrap())
-        .collect();
-    let w = so3::log(init.rotation.transpose() * gt.rotation);
-    let (ls0, ls1) = (
-        DVec3::new(init.scale.x.ln(), init.scale.y.ln(), init.scale.z.ln()),
-        DVec3::new(gt.scale.x.ln(), gt.scale.y.ln(), gt.scale.z.ln()),
-    );
-    let mut last: Option<(f64, f64)> = None;
-    for k in 0..=5 {
-        let a = k as f64 / 5.0;
-        let ls = ls0.lerp(ls1, a);
-        let pose = Pose {
-            rotation: init.rotation * so3::exp(w * a),
-            translation: init.translation.lerp(gt.translation, a),
-            scale: DVec3::new(ls.x.exp(), ls.y.exp(), ls.z.exp()),
-        };
-        let l = evaluate_views(&mut views, &scene.mesh, &pose, &s, &LossSettings::default(), false).unwrap();
-        println!("path {a:.1}: IoU loss {:.5}, contour loss {:.6}", l.iou, l.contour);
-        if let Some((iou, contour)) = last {
-            assert!(l.iou < iou && l.contour < contour, "at {a}");
-        }
-        last = Some((l.iou, l.contour));
-    }
-    let (iou, contour) = last.unwrap();
-    assert!(iou < 0.1 && contour < 0.01);
 }
 
 #[test]
@@ -597,92 +412,4 @@ fn soft_contour_loss_gives_a_signal_when_disjoint() {
     let mut g2 = vec![0.0; alpha.len()];
     soft_iou_loss_grad(&alpha, m, 1.0, &mut g2);
     assert!(r.backward(&g2)[3].abs() < 1e-3 * grad[3]);
-}
-
-// ---------------------------------------------------------------- timings (printed)
-
-fn time_views(label: &str, mesh: &Mesh, pose: &Pose, cams: &[Camera], s: &SoftSettings) {
-    // Targets: the silhouettes at a nearby pose.
-    let near = perturb(pose, &[0.05, 0.03, -0.04, 0.02, -0.01, 0.02, 0.03, 0.0, -0.02]);
-    let mut views: Vec<ViewObjective> = cams
-        .iter()
-        .enumerate()
-        .map(|(i, c)| {
-            let sil = render(mesh, &near, c, s).unwrap();
-            let mask = Mask {
-                width: c.width,
-                height: c.height,
-                data: sil.alpha.iter().map(|&a| (a > 0.5) as u8).collect(),
-            };
-            ViewObjective::new(&format!("v{i}"), *c, &mask).unwrap()
-        })
-        .collect();
-    let loss = LossSettings::default();
-    let n = 20;
-    let mut best = [f64::MAX; 3];
-    for _ in 0..n {
-        let t0 = std::time::Instant::now();
-        for v in views.iter_mut() {
-            v.raster.render(mesh, pose, &v.camera, s).unwrap();
-        }
-        let t1 = t0.elapsed().as_secs_f64();
-        let t0 = std::time::Instant::now();
-        let l = evaluate_views(&mut views, mesh, pose, s, &loss, true).unwrap();
-        let t2 = t0.elapsed().as_secs_f64();
-        // The pose is off its targets: a positive loss with a gradient.
-        assert!(l.total > 0.0 && l.gradient.iter().any(|g| g.abs() > 1e-6));
-        let t0 = std::time::Instant::now();
-        let mut ne = NormalEquations::default();
-        for v in views.iter_mut() {
-            v.normal_equations(mesh, pose, s, &loss, 0.25, &mut ne).unwrap();
-        }
-        let t3 = t0.elapsed().as_secs_f64();
-        assert!(ne.cost > 0.0 && (0..9).all(|i| ne.jtj[i][i] >= 0.0));
-        best = [best[0].min(t1), best[1].min(t2), best[2].min(t3)];
-    }
-    println!(
-        "TIMING {label}: {} tris, {} views {}×{}: forward {:.2} ms, forward+loss+backward {:.2} ms, \
-         Gauss–Newton {:.2} ms (best of {n})",
-        mesh.triangles.len(),
-        cams.len(),
-        cams[0].width,
-        cams[0].height,
-        best[0] * 1e3,
-        best[1] * 1e3,
-        best[2] * 1e3
-    );
-}
-
-#[test]
-fn soft_timings() {
-    for size in [128u32, 256] {
-        let (scene, init) = load_case(size);
-        let cams: Vec<Camera> = scene.views.iter().map(|v| v.camera).collect();
-        let s = SoftSettings::from_ndc(1e-4, size, size);
-        time_views("blob", &scene.mesh, &init, &cams, &s);
-    }
-    let duck_path = fixture("gltf/Duck/glTF-Binary/Duck.glb");
-    match localisebot::io::load_mesh(
-        "Duck.glb",
-        &std::fs::read(&duck_path).unwrap(),
-        &localisebot::io::no_files,
-    ) {
-        Ok(duck) => {
-            let b = duck.bounds().unwrap();
-            let c = b.centre();
-            let r = b.size().length() * 0.5;
-            let cams: Vec<Camera> = [
-                DVec3::new(1.0, 0.5, 1.0),
-                DVec3::new(-1.0, 0.6, 0.8),
-                DVec3::new(0.2, 1.0, -1.0),
-                DVec3::new(-0.7, -0.4, -1.0),
-            ]
-            .iter()
-            .map(|d| Camera::look_at(c + d.normalize() * r * 3.5, c, DVec3::Y, 128, 128, 150.0))
-            .collect();
-            let s = SoftSettings::from_ndc(1e-4, 128, 128);
-            time_views("Duck", &duck, &Pose::IDENTITY, &cams, &s);
-        }
-        Err(e) => println!("TIMING Duck skipped: {e}"),
-    }
 }

@@ -5,6 +5,7 @@
 //! bitsets, intersection and union are word-wise AND/OR and a popcount.
 
 use crate::mask::Mask;
+use glam::DVec2;
 
 /// A binary mask, row-major, row 0 at the top; pixel (x, y) is bit `x % 64` (least
 /// significant first) of word `y · stride + x / 64`. Padding bits past `width` are 0.
@@ -105,6 +106,31 @@ impl BitMask {
             }
         }
         m
+    }
+
+    /// Number of set pixels and their centroid (0 and the origin when empty), by
+    /// popcount per word and trailing-zero walks over the set bits.
+    pub fn area_and_centroid(&self) -> (f64, DVec2) {
+        let stride = self.stride();
+        let (mut n, mut sx, mut sy) = (0u64, 0u64, 0u64);
+        for (i, &w) in self.words.iter().enumerate() {
+            if w == 0 {
+                continue;
+            }
+            let (y, x0) = ((i / stride) as u64, 64 * (i % stride) as u64);
+            let c = w.count_ones() as u64;
+            n += c;
+            sy += y * c;
+            let mut bits = w;
+            while bits != 0 {
+                sx += x0 + bits.trailing_zeros() as u64;
+                bits &= bits - 1;
+            }
+        }
+        if n == 0 {
+            return (0.0, DVec2::ZERO);
+        }
+        (n as f64, DVec2::new(sx as f64 / n as f64, sy as f64 / n as f64))
     }
 
     /// Number of pixels set in both masks.

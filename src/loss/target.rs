@@ -1,0 +1,362 @@
+//! What a loss compares a render with: one view's mask seen through a **window** at
+//! a working resolution (SPEC §4: "every stage works in an object window per view").
+//!
+//! A [`Window`] is a rectangle of the image in continuous pixel coordinates (pixel
+//! centres at integers, so pixel i spans [i − ½, i + ½]). Rendering it at a canvas of
+//! n×m pixels is rendering with the camera whose intrinsics are shifted and scaled to
+//! it ([`Window::camera`]); the canvas is never finer than the image's own pixels.
+//! Object windows ([`Window::around_mask`]) are squares around the mask with a
+//! margin; [`Window::full`] is the whole image.
+//!
+//! A [`ViewTarget`] is the view at one stage: the window camera, the mask resampled
+//! into the canvas (object where at least half of a canvas pixel's known image
+//! pixels are), which canvas pixels are *known* (a pixel whose image pixels are
+//! mostly outside the image or in the ignore mask is unknown and counts in no loss
+//! term and no IoU), the mask's area and centroid, bit masks for the search, and the
+//! contour loss's distance fields when asked for.
+
+use crate::camera::Camera;
+use crate::error::Result;
+use crate::loss::contour::ContourTarget;
+use crate::mask::Mask;
+use crate::raster::hard::BitMask;
+use crate::view::View;
+use glam::DVec2;
+
+/// A rectangle of an image, in continuous pixel coordinates (pixel centres at
+/// integers): `[x0, x0 + width] × [y0, y0 + height]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Window {
+    /// Left edge.
+    pub x0: f64,
+    /// Top edge.
+    pub y0: f64,
+    /// Width, image pixels.
+    pub width: f64,
+    /// Height, image pixels.
+    pub height: f64,
+}
+
+/// How each view's window is chosen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WindowMode {
+    /// The whole image: resolutions count across the image's longest side.
+    Full,
+    /// A square around the mask's bounding box, its side the box's longest side times
+    /// `1 + 2·margin`: resolutions count across the object.
+    Object {
+        /// Margin on each side, as a fraction of the box's longest side.
+        margin: f64,
+    },
+}
+
+impl Window {
+    /// The whole image of `camera`.
+    pub fn full(camera: &Camera) -> Window {
+        Window {
+            x0: -0.5,
+            y0: -0.5,
+            width: camera.width as f64,
+            height: camera.height as f64,
+        }
+    }
+
+    /// A square around the object pixels of `mask` (inclusive bounds), its side the
+    /// box's longest side times `1 + 2·margin` (at least 8 pixels); `None` for an empty mask.
+    pub fn around_mask(mask: &Mask, margin: f64) -> Option<Window> {
+        let (x0, y0, x1, y1) = mask.bbox()?;
+        let (cx, cy) = ((x0 + x1) as f64 * 0.5, (y0 + y1) as f64 * 0.5);
+        let side = ((x1 - x0 + 1).max(y1 - y0 + 1) as f64 * (1.0 + 2.0 * margin.max(0.0))).max(8.0);
+        Some(Window {
+            x0: cx - side * 0.5,
+            y0: cy - side * 0.5,
+            width: side,
+            height: side,
+        })
+    }
+
+    /// The window of `view` under `mode`.
+    pub fn for_view(view: &View, mode: WindowMode) -> Window {
+        match mode {
+            WindowMode::Full => Window::full(view.camera()),
+            WindowMode::Object { margin } => {
+                Window::around_mask(view.mask(), margin).unwrap_or_else(|| Window::full(view.camera()))
+            }
+        }
+    }
+
+    /// The canvas size for `resolution` pixels across the window's longest side, never
+    /// finer than the image (a window of 90 image pixels is at most 90 canvas pixels).
+    pub fn canvas(&self, resolution: u32) -> (u32, u32) {
+        let long = self.width.max(self.height);
+        let n = (resolution as f64).min(long.round()).max(1.0);
+        let k = n / long;
+        (
+            ((self.width * k).round() as u32).max(1),
+            ((self.height * k).round() as u32).max(1),
+        )
+    }
+
+    /// The camera that renders this window onto a `width`×`height` canvas: focal
+    /// lengths scaled, principal point shifted (pixel-centre convention).
+    pub fn camera(&self, camera: &Camera, width: u32, height: u32) -> Camera {
+        let kx = width as f64 / self.width;
+        let ky = height as f64 / self.height;
+        Camera {
+            width,
+            height,
+            fx: camera.fx * kx,
+            fy: camera.fy * ky,
+            cx: (camera.cx - self.x0) * kx - 0.5,
+            cy: (camera.cy - self.y0) * ky - 0.5,
+            ..*camera
+        }
+    }
+
+    /// Image pixel coordinates of canvas point `p` on a `width`×`height` canvas.
+    pub fn to_image(&self, p: DVec2, width: u32, height: u32) -> DVec2 {
+        DVec2::new(
+            self.x0 + (p.x + 0.5) * self.width / width as f64,
+            self.y0 + (p.y + 0.5) * self.height / height as f64,
+        )
+    }
+}
+
+/// The mask and known pixels of `view` resampled into `window` on a `w`×`h` canvas:
+/// every image pixel goes to the canvas pixel holding its centre; a canvas pixel is
+/// known when at least half of its share of image pixels are inside the image and
+/// not ignored, and object when at least half of those known pixels are.
+fn resample(view: &View, window: &Window, w: u32, h: u32) -> (Vec<u8>, Vec<u8>) {
+    let mask = view.mask();
+    let (iw, ih) = (mask.width as usize, mask.height as usize);
+    let (w, h) = (w as usize, h as usize);
+    let kx = w as f64 / window.width;
+    let ky = h as f64 / window.height;
+    let mut known = vec![0u32; w * h];
+    let mut object = vec![0u32; w * h];
+    // Image columns/rows inside the window, and their canvas column/row.
+    let cols: Vec<(usize, usize)> = (0..iw)
+        .filter_map(|x| {
+            let c = ((x as f64 - window.x0) * kx).floor();
+            (c >= 0.0 && c < w as f64).then_some((x, c as usize))
+        })
+        .collect();
+    for y in 0..ih {
+        let r = ((y as f64 - window.y0) * ky).floor();
+        if r < 0.0 || r >= h as f64 {
+            continue;
+        }
+        let row = r as usize * w;
+        for &(x, c) in &cols {
+            let i = y * iw + x;
+            if view.is_known(i) {
+                known[row + c] += 1;
+                object[row + c] += u32::from(mask.data[i] != 0);
+            }
+        }
+    }
+    // Image pixels per canvas pixel.
+    let share = 1.0 / (kx * ky);
+    let known_out: Vec<u8> = known.iter().map(|&k| u8::from(k as f64 >= 0.5 * share)).collect();
+    let mask_out = known
+        .iter()
+        .zip(&object)
+        .zip(&known_out)
+        .map(|((&k, &o), &kn)| u8::from(kn != 0 && 2 * o >= k && o > 0))
+        .collect();
+    (mask_out, known_out)
+}
+
+/// One view prepared for a loss at one resolution (module doc).
+#[derive(Debug, Clone)]
+pub struct ViewTarget {
+    /// The view's name.
+    pub name: String,
+    /// The window, in the view's image.
+    pub window: Window,
+    /// The camera rendering the window onto the canvas (its width × height is the canvas).
+    pub camera: Camera,
+    /// 1 where the canvas pixel is object (and known), row-major.
+    pub mask: Vec<u8>,
+    /// 1 where the canvas pixel is known; `None` when every pixel is.
+    pub known: Option<Vec<u8>>,
+    /// Known object pixels (may be 0 when the object vanishes at a coarse resolution).
+    pub area: f64,
+    /// Their centroid, canvas pixels.
+    pub centroid: DVec2,
+    /// The mask as bits.
+    pub bits: BitMask,
+    /// The known pixels as bits (`None`: all known).
+    pub known_bits: Option<BitMask>,
+    /// The contour loss's distance fields, when asked for and the mask is not empty.
+    pub contour: Option<ContourTarget>,
+}
+
+impl ViewTarget {
+    /// Prepares `view` in `window` at `resolution` pixels across it; with `contour`,
+    /// also the contour loss's distance fields.
+    pub fn new(view: &View, window: Window, resolution: u32, contour: bool) -> Result<ViewTarget> {
+        let (w, h) = window.canvas(resolution);
+        let camera = window.camera(view.camera(), w, h);
+        let (mask, known) = resample(view, &window, w, h);
+        let all_known = known.iter().all(|&k| k != 0);
+        let to_mask = |data: &[u8]| Mask {
+            width: w,
+            height: h,
+            data: data.to_vec(),
+        };
+        let bits = BitMask::from_mask(&to_mask(&mask));
+        let known_bits = (!all_known).then(|| BitMask::from_mask(&to_mask(&known)));
+        let (area, centroid) = bits.area_and_centroid();
+        let known = (!all_known).then_some(known);
+        let contour = if contour && area > 0.0 {
+            Some(ContourTarget::from_parts(w, h, &mask, known.as_deref(), view.name())?)
+        } else {
+            None
+        };
+        Ok(ViewTarget {
+            name: view.name().to_string(),
+            window,
+            camera,
+            mask,
+            known,
+            area,
+            centroid,
+            bits,
+            known_bits,
+            contour,
+        })
+    }
+
+    /// Canvas width and height.
+    pub fn size(&self) -> (u32, u32) {
+        (self.camera.width, self.camera.height)
+    }
+
+    /// Whether canvas pixel `i` is known.
+    #[inline]
+    pub fn is_known(&self, i: usize) -> bool {
+        self.known.as_ref().is_none_or(|k| k[i] != 0)
+    }
+
+    /// Hard IoU of a rendered bit mask with the mask over the known pixels; 0 when
+    /// both are empty there.
+    pub fn hard_iou(&self, rendered: &BitMask) -> f64 {
+        let (mut inter, mut union) = (0u64, 0u64);
+        match &self.known_bits {
+            None => {
+                for (a, b) in rendered.words.iter().zip(&self.bits.words) {
+                    inter += u64::from((a & b).count_ones());
+                    union += u64::from((a | b).count_ones());
+                }
+            }
+            Some(k) => {
+                for ((a, b), k) in rendered.words.iter().zip(&self.bits.words).zip(&k.words) {
+                    inter += u64::from((a & b).count_ones());
+                    union += u64::from(((a | b) & k).count_ones());
+                }
+            }
+        }
+        if union == 0 {
+            0.0
+        } else {
+            inter as f64 / union as f64
+        }
+    }
+
+    /// Keeps only the known pixels of a rendered bit mask (in place).
+    pub fn keep_known(&self, rendered: &mut BitMask) {
+        if let Some(k) = &self.known_bits {
+            for (a, k) in rendered.words.iter_mut().zip(&k.words) {
+                *a &= k;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::view::ViewSources;
+    use glam::DVec3;
+
+    fn view_with(mask: Mask, ignore: Option<Mask>) -> View {
+        let cam = Camera::look_at(
+            DVec3::new(0.0, 0.0, -3.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            mask.width,
+            mask.height,
+            200.0,
+        );
+        View::new("v", cam, mask, ignore, None, &ViewSources::default()).unwrap()
+    }
+
+    fn rect(w: u32, h: u32, x0: u32, y0: u32, x1: u32, y1: u32) -> Mask {
+        let mut m = Mask::empty(w, h);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                m.data[(y * w + x) as usize] = 1;
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn full_window_camera_is_the_scaled_camera() {
+        let v = view_with(rect(640, 480, 100, 100, 140, 150), None);
+        let win = Window::full(v.camera());
+        assert_eq!(win.canvas(128), (128, 96));
+        assert_eq!(win.canvas(4000), (640, 480), "never finer than the image");
+        let a = win.camera(v.camera(), 128, 96);
+        let b = v.camera().scaled(128, 96);
+        assert!((a.cx - b.cx).abs() < 1e-12 && (a.fy - b.fy).abs() < 1e-12);
+    }
+
+    #[test]
+    fn object_window_maps_pixels_onto_the_canvas() {
+        let v = view_with(rect(640, 480, 300, 200, 339, 229), None);
+        let win = Window::for_view(&v, WindowMode::Object { margin: 0.25 });
+        // A 40-px box: a 60-px square centred on it.
+        assert!((win.width - 60.0).abs() < 1e-12 && (win.height - 60.0).abs() < 1e-12);
+        assert_eq!(win.canvas(256), (60, 60), "never upsampled");
+        assert_eq!(win.canvas(30), (30, 30));
+        // A world point projects to the same image point through the window camera.
+        let cam = win.camera(v.camera(), 30, 30);
+        let p = DVec3::new(0.05, -0.03, 0.1);
+        let full = v.camera().project(v.camera().to_camera(p));
+        let canvas = cam.project(cam.to_camera(p));
+        assert!((win.to_image(canvas, 30, 30) - full).length() < 1e-9);
+        let t = ViewTarget::new(&v, win, 30, true).unwrap();
+        // 40×30 image pixels at half resolution: 20×15 canvas pixels (a row more
+        // where the box's edges fall mid-pixel: half-covered pixels count as object).
+        assert!((t.area - 300.0).abs() <= 20.0, "{}", t.area);
+        assert!(t.known.is_none() && t.contour.is_some());
+        assert!((win.to_image(t.centroid, 30, 30) - DVec2::new(319.5, 214.5)).length() < 0.6);
+    }
+
+    #[test]
+    fn pixels_outside_the_image_and_ignored_pixels_are_unknown() {
+        // An object cut by the left border, and an ignore mask over part of it.
+        let mask = rect(200, 100, 0, 40, 29, 69);
+        let ignore = rect(200, 100, 20, 40, 29, 49);
+        let v = view_with(mask, Some(ignore));
+        let win = Window::for_view(&v, WindowMode::Object { margin: 0.5 });
+        let t = ViewTarget::new(&v, win, 256, true).unwrap();
+        let (w, h) = t.size();
+        assert_eq!((w, h), (60, 60));
+        let known = t.known.as_ref().unwrap();
+        // The window starts 15 px left of the image: those columns are unknown.
+        assert!((0..h as usize).all(|y| known[y * w as usize + 10] == 0));
+        assert_eq!(known[30 * w as usize + 40], 1);
+        // The ignored 10×10 block is unknown and not object.
+        assert_eq!(t.area, 30.0 * 30.0 - 100.0);
+        let mut full = BitMask::empty(w, h);
+        for y in 0..h {
+            full.fill_span(y as usize, 0, w as usize - 1);
+        }
+        // A render covering the whole canvas: IoU = object / known pixels.
+        let n_known = known.iter().filter(|&&k| k != 0).count() as f64;
+        assert!((t.hard_iou(&full) - t.area / n_known).abs() < 1e-12);
+    }
+}
