@@ -59,13 +59,16 @@ pub struct FitSettings {
     pub lambda_contour: f64,
     /// How the scale is fitted (default anisotropic).
     pub scale_mode: ScaleMode,
-    /// Each view's window (default: the whole image).
+    /// Each view's window (default: a square around the mask, 30 % margin on each side).
     pub window: WindowMode,
     /// A stage ends for a candidate when its best loss improved by less than this
     /// (relative) over 5 iterations (default 1e-3); in the last stage that is convergence.
     pub tolerance: f64,
     /// Where the verdict's lines are drawn.
     pub verdict: VerdictThresholds,
+    /// Down-weight, from the second stage on, a view whose loss contradicts the
+    /// others' ([`robust_weights`]; default on).
+    pub robust: bool,
 }
 
 impl Default for FitSettings {
@@ -78,9 +81,10 @@ impl Default for FitSettings {
             lambda_iou: 1.0,
             lambda_contour: 1.0,
             scale_mode: ScaleMode::Anisotropic,
-            window: WindowMode::Full,
+            window: WindowMode::Object { margin: 0.3 },
             tolerance: 1e-3,
             verdict: VerdictThresholds::default(),
+            robust: true,
         }
     }
 }
@@ -189,11 +193,17 @@ struct Track {
     history: Vec<f64>,
     done_in_stage: bool,
     converged: bool,
+    /// The views' weights in this candidate's objective (robust re-weighting).
+    weights: Vec<f64>,
+    /// Views the leave-one-out test found to contradict the others (weight 0).
+    excluded: Vec<bool>,
 }
 
 impl Track {
-    fn new(pose: Pose) -> Track {
+    fn new(pose: Pose, views: usize) -> Track {
         Track {
+            weights: vec![1.0; views],
+            excluded: vec![false; views],
             pose,
             adam: Adam::new(),
             lm: Lm::new(),
@@ -409,7 +419,8 @@ impl Estimator {
     }
 
     fn begin_refine(&mut self, poses: Vec<Pose>) -> Result<()> {
-        self.tracks = poses.into_iter().map(Track::new).collect();
+        let n = self.views.len();
+        self.tracks = poses.into_iter().map(|p| Track::new(p, n)).collect();
         self.phase = Phase::Refine;
         self.stage = 0;
         self.current = 0;
@@ -483,6 +494,11 @@ impl Estimator {
             let poses: Vec<Pose> = best.iter().map(|c| c.pose).collect();
             let poses = if poses.is_empty() { vec![self.start] } else { poses };
             self.begin_refine(poses)?;
+            if self.settings.robust {
+                for (t, c) in self.tracks.iter_mut().zip(&best) {
+                    t.weights = robust_weights(&c.ious.iter().map(|i| 1.0 - i).collect::<Vec<_>>());
+                }
+            }
         }
         Ok(())
     }
@@ -500,6 +516,7 @@ impl Estimator {
             &self.mesh
         };
         let t = &mut self.tracks[self.current];
+        objective.set_weights(&t.weights)?;
         let length = self.radius * t.pose.scale.max_element();
         let loss = match self.settings.optimiser {
             Optimiser::Adam => {
@@ -520,11 +537,7 @@ impl Estimator {
             Optimiser::LevenbergMarquardt => {
                 let (ev, ne) = objective.normal_equations(mesh, &t.pose)?;
                 t.record(ev.total);
-                let free = match self.settings.scale_mode {
-                    ScaleMode::Fixed => Free::NoScale,
-                    ScaleMode::Isotropic => Free::IsotropicScale,
-                    ScaleMode::Anisotropic => Free::All,
-                };
+                let free = free_parameters(self.settings.scale_mode);
                 let scaled = lm::scale_equations(&ne, length);
                 t.pose = t.lm.next_pose(t.pose, scaled, free, |p, d| params::apply(p, d, length));
                 ev.total
@@ -572,13 +585,25 @@ impl Estimator {
             .map(|mut t| {
                 t.pose = t.best_pose;
                 let ious = objective.hard_ious(&self.mesh, &t.pose);
-                (ious.iter().sum::<f64>() / ious.len().max(1) as f64, t)
+                let wsum = t.weights.iter().sum::<f64>().max(1e-300);
+                (ious.iter().zip(&t.weights).map(|(i, w)| i * w).sum::<f64>() / wsum, t)
             })
             .collect();
         scored.sort_by(|a, b| b.0.total_cmp(&a.0));
         let keep = self.settings.stages[self.stage].keep;
         self.tracks = scored.into_iter().take(keep).map(|(_, t)| t).collect();
         self.current = 0;
+        if self.stage == 0 && self.settings.robust {
+            let free = free_parameters(self.settings.scale_mode);
+            for t in &mut self.tracks {
+                if let Some((v, pose)) = leave_one_out(objective, &self.search_mesh, t, free, self.radius)? {
+                    t.excluded[v] = true;
+                    t.weights[v] = 0.0;
+                    t.pose = pose;
+                    t.best_pose = pose;
+                }
+            }
+        }
         if self.stage + 1 < self.settings.stages.len() {
             self.stage += 1;
             for t in &mut self.tracks {
@@ -588,7 +613,19 @@ impl Estimator {
                 t.since_best = 0;
                 t.done_in_stage = false;
             }
-            self.objective = Some(self.make_objective(self.stage)?);
+            let mut objective = self.make_objective(self.stage)?;
+            if self.settings.robust {
+                for t in &mut self.tracks {
+                    let ev = objective.value(&self.mesh, &t.pose)?;
+                    let w = robust_weights(&ev.views.iter().map(|v| v.iou).collect::<Vec<_>>());
+                    t.weights = w
+                        .iter()
+                        .zip(&t.excluded)
+                        .map(|(w, &x)| if x { 0.0 } else { *w })
+                        .collect();
+                }
+            }
+            self.objective = Some(objective);
         } else {
             self.finish();
         }
@@ -602,7 +639,14 @@ impl Estimator {
         let views: Vec<ViewFigures> = self.views.iter().map(|v| full_figures(&self.mesh, &pose, v)).collect();
         let names: Vec<&str> = self.views.iter().map(|v| v.name()).collect();
         let ious: Vec<f64> = views.iter().map(|f| f.iou).collect();
-        let judgement = verdict::judge(&names, &ious, &[], &self.settings.verdict);
+        let inconsistent: Vec<String> = self
+            .views
+            .iter()
+            .zip(&t.weights)
+            .filter(|(_, &w)| w < 0.5)
+            .map(|(v, _)| v.name().to_string())
+            .collect();
+        let judgement = verdict::judge(&names, &ious, &inconsistent, &self.settings.verdict);
         self.termination = Some(if t.converged && judgement.verdict != Verdict::Failed {
             Termination::Converged
         } else if t.converged || t.since_best >= PATIENCE {
@@ -691,6 +735,128 @@ impl Estimator {
             _ => self.views.iter().map(|v| full_figures(&self.mesh, pose, v)).collect(),
         }
     }
+}
+
+/// The LM parameters a scale mode frees.
+fn free_parameters(mode: ScaleMode) -> Free {
+    match mode {
+        ScaleMode::Fixed => Free::NoScale,
+        ScaleMode::Isotropic => Free::IsotropicScale,
+        ScaleMode::Anisotropic => Free::All,
+    }
+}
+
+/// Levenberg–Marquardt iterations of `objective` from `start`; the best pose and loss.
+fn polish(
+    objective: &mut Objective,
+    mesh: &Mesh,
+    start: Pose,
+    iterations: usize,
+    free: Free,
+    radius: f64,
+) -> Result<(Pose, f64)> {
+    let mut lm = Lm::new();
+    let (mut pose, mut best) = (start, (start, f64::INFINITY));
+    for _ in 0..iterations {
+        let (ev, ne) = objective.normal_equations(mesh, &pose)?;
+        if ev.total < best.1 {
+            best = (pose, ev.total);
+        }
+        let length = radius * pose.scale.max_element();
+        pose = lm.next_pose(pose, lm::scale_equations(&ne, length), free, |p, d| {
+            params::apply(p, d, length)
+        });
+    }
+    Ok(best)
+}
+
+/// Iterations of each leave-one-out fit.
+const LOO_ITERATIONS: usize = 15;
+
+/// The leave-one-out consensus test (SPEC §4, occlusion without an ignore mask): when
+/// one view's loss stands out at the candidate's pose, each view in turn is left out
+/// for a short fit; a view is inconsistent when, without it, the others agree better
+/// (their mean IoU loss falls) while it disagrees with them (its loss above twice the
+/// worst of theirs, plus 0.05). Returns the view
+/// whose omission helps the others most, with the pose fitted without it.
+fn leave_one_out(
+    objective: &mut Objective,
+    mesh: &Mesh,
+    track: &Track,
+    free: Free,
+    radius: f64,
+) -> Result<Option<(usize, Pose)>> {
+    let n = track.weights.len();
+    if n < 3 || track.excluded.iter().any(|&x| x) {
+        return Ok(None);
+    }
+    objective.set_weights(&track.weights)?;
+    let losses: Vec<f64> = objective
+        .value(mesh, &track.pose)?
+        .views
+        .iter()
+        .map(|v| v.iou)
+        .collect();
+    let mut sorted = losses.clone();
+    sorted.sort_by(f64::total_cmp);
+    let (median, worst) = (sorted[n / 2], sorted[n - 1]);
+    if worst <= 1.3 * median || worst < median + 0.05 {
+        return Ok(None);
+    }
+    let mut found: Option<(f64, usize, Pose)> = None;
+    for v in 0..n {
+        let mut w = track.weights.clone();
+        w[v] = 0.0;
+        if w.iter().sum::<f64>() <= 0.0 {
+            continue;
+        }
+        objective.set_weights(&w)?;
+        let (pose, _) = polish(objective, mesh, track.pose, LOO_ITERATIONS, free, radius)?;
+        let l: Vec<f64> = objective.value(mesh, &pose)?.views.iter().map(|v| v.iou).collect();
+        let others = |x: &[f64]| {
+            x.iter()
+                .enumerate()
+                .filter(|(u, _)| *u != v)
+                .map(|(_, l)| *l)
+                .collect::<Vec<_>>()
+        };
+        let (before, after) = (others(&losses), others(&l));
+        let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+        let worst_other = after.iter().fold(0.0f64, |m, x| m.max(*x));
+        if mean(&after) < mean(&before)
+            && l[v] > 2.0 * worst_other + 0.05
+            && found.as_ref().is_none_or(|f| mean(&after) < f.0)
+        {
+            found = Some((mean(&after), v, pose));
+        }
+    }
+    objective.set_weights(&track.weights)?;
+    Ok(found.map(|(_, v, p)| (v, p)))
+}
+
+/// The views' weights from their soft IoU losses `r_v` at a candidate's pose (SPEC
+/// §4, occlusion without an ignore mask): a view whose loss is far above the others'
+/// contradicts them — an occluder, the gripper, a bad mask — and is down-weighted.
+/// With the robust scale `τ = max(2·median(r), 0.05)`, `w_v = 1` for `r_v ≤ τ` and
+/// `(τ/r_v)²` above (a Cauchy-like tail); with fewer than 3 views there is no majority
+/// to trust and every weight is 1.
+pub fn robust_weights(losses: &[f64]) -> Vec<f64> {
+    if losses.len() < 3 || losses.iter().any(|r| !r.is_finite()) {
+        return vec![1.0; losses.len()];
+    }
+    let mut sorted = losses.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let n = sorted.len();
+    let median = if n % 2 == 1 {
+        sorted[n / 2]
+    } else {
+        0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
+    };
+    let tau = (2.0 * median).max(0.05);
+    losses
+        .iter()
+        .map(|&r| if r <= tau { 1.0 } else { (tau / r).powi(2) })
+        .collect()
 }
 
 /// A view's figures at full resolution (IoU over the known pixels).

@@ -51,6 +51,13 @@ pub enum MaskArg {
     Visib,
 }
 
+/// What `import bop --ignore` ignores.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum IgnoreArg {
+    /// The other annotated objects' visible masks.
+    Others,
+}
+
 /// Arguments of `import bop`.
 #[derive(Args)]
 pub struct BopArgs {
@@ -80,6 +87,10 @@ pub struct BopArgs {
     /// Mask folder.
     #[arg(long, value_enum, default_value = "full")]
     masks: MaskArg,
+    /// `others`: each view's ignore mask is the union of the other annotated objects'
+    /// visible masks (occluders become unknown pixels).
+    #[arg(long, value_enum)]
+    ignore: Option<IgnoreArg>,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -111,6 +122,7 @@ pub fn run(cmd: &ImportCommand) -> CliResult {
                 UnitArg::M => Units::Metres,
                 UnitArg::Mm => Units::Millimetres,
             };
+            o.ignore_others = matches!(a.ignore, Some(IgnoreArg::Others));
             o.masks = match a.masks {
                 MaskArg::Full => MaskKind::Full,
                 MaskArg::Visib => MaskKind::Visible,

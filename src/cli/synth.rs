@@ -37,6 +37,11 @@ pub struct SynthArgs {
     /// Also write shaded renders as the views' images.
     #[arg(long)]
     images: bool,
+    /// Occlude a view: `VIEW:FRACTION` hides that fraction of view VIEW's object
+    /// behind a rectangular occluder, cut from its mask and written as its ignore mask
+    /// (`masks/viewK_ignore.png`); repeatable.
+    #[arg(long, value_parser = parse_occlusion)]
+    occlude: Vec<(usize, f64)>,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -65,10 +70,26 @@ pub fn run(a: &SynthArgs) -> CliResult {
             a.grasps
         );
     }
+    if let Some((v, _)) = a.occlude.iter().find(|(v, _)| *v >= scene.cameras.len()) {
+        return Err(format!(
+            "--occlude: no view {v} (the scene has {})",
+            scene.cameras.len()
+        ));
+    }
     let mut views = Vec::new();
     for (i, (cam, mask)) in scene.cameras.iter().zip(&scene.masks).enumerate() {
         let name = format!("view{i}");
         let rel = format!("masks/{name}.png");
+        let (mask, ignore) = match a.occlude.iter().find(|(v, _)| *v == i) {
+            Some(&(_, f)) => {
+                let (cut, occluder) = localisebot::synth::occlude(mask, f, a.seed + i as u64);
+                let rel = format!("masks/{name}_ignore.png");
+                let grey: Vec<u8> = occluder.data.iter().map(|&v| v * 255).collect();
+                write(&a.out.join(&rel), &encode_gray(mask.width, mask.height, &grey))?;
+                (cut, Some(rel))
+            }
+            None => (mask.clone(), None),
+        };
         let grey: Vec<u8> = mask.data.iter().map(|&v| v * 255).collect();
         write(&a.out.join(&rel), &encode_gray(mask.width, mask.height, &grey))?;
         let image = match scene.images.get(i) {
@@ -80,7 +101,7 @@ pub fn run(a: &SynthArgs) -> CliResult {
             None => None,
         };
         views.push(ViewJson {
-            ignore: None,
+            ignore,
             name,
             image,
             mask: rel,
@@ -102,6 +123,17 @@ pub fn run(a: &SynthArgs) -> CliResult {
         scene.cameras.len()
     );
     Ok(())
+}
+
+fn parse_occlusion(s: &str) -> Result<(usize, f64), String> {
+    let bad = || format!("expected VIEW:FRACTION (e.g. 1:0.3), got '{s}'");
+    let (v, f) = s.split_once(':').ok_or_else(bad)?;
+    let v: usize = v.parse().map_err(|_| bad())?;
+    let f: f64 = f.parse().map_err(|_| bad())?;
+    if !(0.0..1.0).contains(&f) {
+        return Err(format!("the occluded fraction must be in [0, 1), got {f}"));
+    }
+    Ok((v, f))
 }
 
 /// Copies the mesh file, and a `.gltf`'s external buffers and images, into `out`.

@@ -73,6 +73,9 @@ pub struct BopOptions {
     pub masks: MaskKind,
     /// Unit of the imported scene.
     pub units: Units,
+    /// Write, for each view, the union of the *other* annotated objects' visible
+    /// masks (`mask_visib/`) as its ignore mask: occluders become unknown pixels.
+    pub ignore_others: bool,
 }
 
 impl BopOptions {
@@ -88,6 +91,7 @@ impl BopOptions {
             models_dir: "models".into(),
             masks: MaskKind::Full,
             units: Units::Metres,
+            ignore_others: false,
         }
     }
 }
@@ -116,25 +120,34 @@ struct Chosen {
     m2c: DMat4,
     mask_rel: String,
     mask_bytes: Vec<u8>,
+    /// The ignore mask (path, PNG bytes), when asked for and not empty.
+    ignore: Option<(String, Vec<u8>)>,
     width: u32,
     height: u32,
     image: Option<(String, Vec<u8>)>,
 }
 
-/// A rigid 4×4 from a row-major rotation (re-orthonormalised: BOP stores ~7 digits)
-/// and a translation.
-fn rigid(r: [f64; 9], t: [f64; 3], unit: f64) -> DMat4 {
-    let r = so3::orthonormalize(mat3_from_rows([
-        [r[0], r[1], r[2]],
-        [r[3], r[4], r[5]],
-        [r[6], r[7], r[8]],
-    ]));
-    DMat4::from_cols(
+/// A rigid 4×4 from a row-major rotation and a translation. BOP stores ~7 digits,
+/// and annotations are off SO(3) by up to ~1e-2: a rotation within
+/// [`so3::SO3_TOLERANCE`] is projected onto the nearest one (with a warning naming
+/// the image when it is off by more than rounding); a larger deviation is an error.
+fn rigid(r: [f64; 9], t: [f64; 3], unit: f64, what: &str, warnings: &mut Vec<String>) -> Result<DMat4> {
+    let m = mat3_from_rows([[r[0], r[1], r[2]], [r[3], r[4], r[5]], [r[6], r[7], r[8]]]);
+    let (r, e) = so3::accept_rotation(m).map_err(|why| Error::Json {
+        file: "scene_gt.json / scene_camera.json".into(),
+        problem: format!("{what}: the rotation {why}"),
+    })?;
+    if e > so3::SO3_SILENT {
+        warnings.push(format!(
+            "{what}: the rotation is off SO(3) by {e:.2e}: projected onto the nearest rotation"
+        ));
+    }
+    Ok(DMat4::from_cols(
         r.x_axis.extend(0.0),
         r.y_axis.extend(0.0),
         r.z_axis.extend(0.0),
         (DVec3::from_array(t) * unit).extend(1.0),
-    )
+    ))
 }
 
 fn parse<T: for<'de> Deserialize<'de>>(files: Resolver, path: &str, referrer: &str) -> Result<T> {
@@ -252,8 +265,12 @@ pub fn import(files: Resolver, opts: &BopOptions) -> Result<Imported> {
             rel
         });
         files_out.push((c.mask_rel.clone(), c.mask_bytes));
+        let ignore = c.ignore.map(|(rel, bytes)| {
+            files_out.push((rel.clone(), bytes));
+            rel
+        });
         views.push(ViewJson {
-            ignore: None,
+            ignore,
             name,
             image,
             mask: c.mask_rel,
@@ -349,20 +366,71 @@ fn choose(
             dims == Some((mask.width, mask.height))
         });
     let w2c = match (cam.cam_R_w2c, cam.cam_t_w2c) {
-        (Some(r), Some(t)) => Some(rigid(r, t, unit)),
+        (Some(r), Some(t)) => Some(rigid(r, t, unit, &format!("image {id:06}: cam_R_w2c"), warnings)?),
         _ => None,
+    };
+    let m2c = rigid(
+        gt.cam_R_m2c,
+        gt.cam_t_m2c,
+        unit,
+        &format!("image {id:06}: cam_R_m2c"),
+        warnings,
+    )?;
+    let ignore = if opts.ignore_others {
+        others_mask(files, scene_dir, id, gtid, &gts[&id], &mask, warnings)?
+            .map(|png| (format!("masks/{name}_ignore.png"), png))
+    } else {
+        None
     };
     Ok(Some(Chosen {
         id,
         k,
         w2c,
-        m2c: rigid(gt.cam_R_m2c, gt.cam_t_m2c, unit),
+        m2c,
         mask_rel: format!("masks/{name}.png"),
         mask_bytes,
+        ignore,
         width: mask.width,
         height: mask.height,
         image,
     }))
+}
+
+/// The union of the visible masks of the other instances annotated in image `id`
+/// (all but `gtid`), as a PNG, or `None` when they cover nothing. Missing masks are
+/// warned about; a mask of another size is an error.
+fn others_mask(
+    files: Resolver,
+    scene_dir: &str,
+    id: u32,
+    gtid: usize,
+    entries: &[GtEntry],
+    mask: &crate::mask::Mask,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Vec<u8>>> {
+    let mut union = vec![0u8; mask.data.len()];
+    for other in (0..entries.len()).filter(|&i| i != gtid) {
+        let path = join(scene_dir, &format!("mask_visib/{id:06}_{other:06}.png"));
+        let Some(bytes) = files(&path) else {
+            warnings.push(format!("image {id:06}: {path} not found: that occluder is not ignored"));
+            continue;
+        };
+        let m = crate::io::mask::decode_mask_sized(&bytes, &format!("{id:06}"), &path, mask.width, mask.height)?;
+        for (u, &v) in union.iter_mut().zip(&m.data) {
+            *u |= v;
+        }
+    }
+    // The object's own pixels stay known.
+    for (u, &v) in union.iter_mut().zip(&mask.data) {
+        if v != 0 {
+            *u = 0;
+        }
+    }
+    if union.iter().all(|&v| v == 0) {
+        return Ok(None);
+    }
+    let grey: Vec<u8> = union.iter().map(|&v| v * 255).collect();
+    Ok(Some(crate::io::png::encode_gray(mask.width, mask.height, &grey)))
 }
 
 /// Validates the model and adds it to the files to write (converted to metres when

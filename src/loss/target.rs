@@ -62,14 +62,18 @@ impl Window {
     }
 
     /// A square around the object pixels of `mask` (inclusive bounds), its side the
-    /// box's longest side times `1 + 2·margin` (at least 8 pixels); `None` for an empty mask.
+    /// box's longest side times `1 + 2·margin` rounded up to whole pixels (at least 8),
+    /// its edges on pixel edges (so that at full resolution its pixels are the image's);
+    /// `None` for an empty mask.
     pub fn around_mask(mask: &Mask, margin: f64) -> Option<Window> {
         let (x0, y0, x1, y1) = mask.bbox()?;
         let (cx, cy) = ((x0 + x1) as f64 * 0.5, (y0 + y1) as f64 * 0.5);
-        let side = ((x1 - x0 + 1).max(y1 - y0 + 1) as f64 * (1.0 + 2.0 * margin.max(0.0))).max(8.0);
+        let side = ((x1 - x0 + 1).max(y1 - y0 + 1) as f64 * (1.0 + 2.0 * margin.max(0.0)))
+            .ceil()
+            .max(8.0);
         Some(Window {
-            x0: cx - side * 0.5,
-            y0: cy - side * 0.5,
+            x0: (cx - side * 0.5).round() - 0.5,
+            y0: (cy - side * 0.5).round() - 0.5,
             width: side,
             height: side,
         })
@@ -86,11 +90,14 @@ impl Window {
     }
 
     /// The canvas size for `resolution` pixels across the window's longest side, never
-    /// finer than the image (a window of 90 image pixels is at most 90 canvas pixels).
+    /// finer than the image (a window of 90 image pixels is at most 90 canvas pixels;
+    /// at its own resolution its canvas pixels are its image pixels).
     pub fn canvas(&self, resolution: u32) -> (u32, u32) {
         let long = self.width.max(self.height);
-        let n = (resolution as f64).min(long.round()).max(1.0);
-        let k = n / long;
+        if resolution as f64 >= long.round() {
+            return ((self.width.round() as u32).max(1), (self.height.round() as u32).max(1));
+        }
+        let k = resolution.max(1) as f64 / long;
         (
             ((self.width * k).round() as u32).max(1),
             ((self.height * k).round() as u32).max(1),
@@ -122,48 +129,69 @@ impl Window {
     }
 }
 
-/// The mask and known pixels of `view` resampled into `window` on a `w`×`h` canvas:
-/// every image pixel goes to the canvas pixel holding its centre; a canvas pixel is
-/// known when at least half of its share of image pixels are inside the image and
-/// not ignored, and object when at least half of those known pixels are.
+/// For each canvas column (or row) of a window side starting at `origin` (image
+/// coordinates) with `k` canvas pixels per image pixel, the image pixels it overlaps
+/// and the overlap lengths (in image pixels; out-of-image indices included as
+/// negative or ≥ `n_image`, to be treated as unknown).
+fn overlaps(origin: f64, k: f64, n_canvas: usize) -> Vec<Vec<(i64, f64)>> {
+    (0..n_canvas)
+        .map(|c| {
+            let (a, b) = (origin + c as f64 / k, origin + (c + 1) as f64 / k);
+            // Image pixel i spans [i − ½, i + ½].
+            let (first, last) = ((a + 0.5).floor() as i64, (b + 0.5).ceil() as i64 - 1);
+            (first..=last)
+                .filter_map(|i| {
+                    let o = (b.min(i as f64 + 0.5) - a.max(i as f64 - 0.5)).max(0.0);
+                    (o > 1e-12).then_some((i, o))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The mask and known pixels of `view` resampled into `window` on a `w`×`h` canvas
+/// by exact area weights: a canvas pixel is known when at least half of its area
+/// lies on known image pixels (inside the image, not ignored), and object when at
+/// least half of that known area is object. When the canvas has the window's own
+/// resolution (an object window is aligned to the pixel grid) this is a plain copy.
 fn resample(view: &View, window: &Window, w: u32, h: u32) -> (Vec<u8>, Vec<u8>) {
     let mask = view.mask();
-    let (iw, ih) = (mask.width as usize, mask.height as usize);
+    let (iw, ih) = (mask.width as i64, mask.height as i64);
     let (w, h) = (w as usize, h as usize);
     let kx = w as f64 / window.width;
     let ky = h as f64 / window.height;
-    let mut known = vec![0u32; w * h];
-    let mut object = vec![0u32; w * h];
-    // Image columns/rows inside the window, and their canvas column/row.
-    let cols: Vec<(usize, usize)> = (0..iw)
-        .filter_map(|x| {
-            let c = ((x as f64 - window.x0) * kx).floor();
-            (c >= 0.0 && c < w as f64).then_some((x, c as usize))
-        })
-        .collect();
-    for y in 0..ih {
-        let r = ((y as f64 - window.y0) * ky).floor();
-        if r < 0.0 || r >= h as f64 {
-            continue;
-        }
-        let row = r as usize * w;
-        for &(x, c) in &cols {
-            let i = y * iw + x;
-            if view.is_known(i) {
-                known[row + c] += 1;
-                object[row + c] += u32::from(mask.data[i] != 0);
+    let cols = overlaps(window.x0, kx, w);
+    let rows = overlaps(window.y0, ky, h);
+    let area = 1.0 / (kx * ky);
+    let mut mask_out = vec![0u8; w * h];
+    let mut known_out = vec![0u8; w * h];
+    for (r, row) in rows.iter().enumerate() {
+        for (c, col) in cols.iter().enumerate() {
+            let (mut known, mut object) = (0.0, 0.0);
+            for &(y, wy) in row {
+                if y < 0 || y >= ih {
+                    continue;
+                }
+                for &(x, wx) in col {
+                    if x < 0 || x >= iw {
+                        continue;
+                    }
+                    let i = (y * iw + x) as usize;
+                    if view.is_known(i) {
+                        known += wx * wy;
+                        if mask.data[i] != 0 {
+                            object += wx * wy;
+                        }
+                    }
+                }
+            }
+            let o = r * w + c;
+            if known >= 0.5 * area - 1e-9 {
+                known_out[o] = 1;
+                mask_out[o] = u8::from(object > 0.0 && object >= 0.5 * known - 1e-9);
             }
         }
     }
-    // Image pixels per canvas pixel.
-    let share = 1.0 / (kx * ky);
-    let known_out: Vec<u8> = known.iter().map(|&k| u8::from(k as f64 >= 0.5 * share)).collect();
-    let mask_out = known
-        .iter()
-        .zip(&object)
-        .zip(&known_out)
-        .map(|((&k, &o), &kn)| u8::from(kn != 0 && 2 * o >= k && o > 0))
-        .collect();
     (mask_out, known_out)
 }
 

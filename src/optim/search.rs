@@ -61,17 +61,25 @@ impl Sampling {
 }
 
 /// A scored candidate.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Candidate {
     /// Its pose after the translation/scale re-fit.
     pub pose: Pose,
     /// Mean hard IoU over the views at low resolution.
     pub score: f64,
+    /// Each view's hard IoU.
+    pub ious: Vec<f64>,
 }
 
 /// Re-fits the translation (and with `refit_scale` an isotropic scale) of `pose` to
 /// the targets' mask centroids and areas, `rounds` times, then scores it by the mean
 /// hard IoU over the views. `centre` is the mesh's model-frame centre; `bits` scratch.
+///
+/// With three views or more the re-fit is robust to one view that disagrees (an
+/// occluded mask's centroid and area are off): the translation is the
+/// iteratively re-weighted least-squares solution over the views' centroid shifts
+/// (weights `1/(1 + (e_v/2ẽ)²)`, e_v a view's residual, ẽ their median), and the
+/// scale follows the median of the views' area ratios.
 pub fn score_candidate(
     mesh: &Mesh,
     targets: &[ViewTarget],
@@ -81,11 +89,12 @@ pub fn score_candidate(
     refit_scale: bool,
     bits: &mut BitMask,
 ) -> Candidate {
+    let robust = targets.len() >= 3;
     for _ in 0..rounds {
-        let mut area_r = 0.0;
-        let mut area_m = 0.0;
-        let mut a = DMat3::ZERO;
-        let mut b = DVec3::ZERO;
+        // Per view: the two camera-axis rows and the wanted camera-frame shift.
+        let mut rows = Vec::with_capacity(targets.len());
+        let mut ratios = Vec::with_capacity(targets.len());
+        let (mut area_r, mut area_m) = (0.0, 0.0);
         for t in targets {
             let proj = project_mesh(mesh, &pose, &t.camera);
             render_bits_into(&proj, &mesh.triangles, &t.camera, bits);
@@ -96,44 +105,81 @@ pub fn score_candidate(
             if ar == 0.0 || t.area == 0.0 {
                 continue;
             }
+            ratios.push(t.area / ar);
             // Shift the object so its rendered centroid moves onto the mask's:
             // a camera-frame move (Δx, Δy) at the object's depth z.
             let z = t.camera.to_camera(pose.apply(centre)).z.max(1e-9);
             let d = t.centroid - cr;
-            let target = DVec3::new(d.x * z / t.camera.fx, d.y * z / t.camera.fy, 0.0);
             let r = t.camera.rotation;
-            // Least squares over views of |P·R·Δt − target|², P dropping the z row.
-            let rx = r.row(0);
-            let ry = r.row(1);
-            a += DMat3::from_cols(rx * rx.x, rx * rx.y, rx * rx.z) + DMat3::from_cols(ry * ry.x, ry * ry.y, ry * ry.z);
-            b += rx * target.x + ry * target.y;
+            rows.push((r.row(0), r.row(1), d.x * z / t.camera.fx, d.y * z / t.camera.fy));
         }
         if area_r == 0.0 {
             break;
         }
-        // A little damping keeps one-view (depth-blind) fits well posed.
-        let damp = 1e-6 * (a.x_axis.x + a.y_axis.y + a.z_axis.z);
-        let dt = (a + DMat3::IDENTITY * damp).inverse() * b;
-        let ds = if refit_scale {
-            (area_m / area_r).sqrt().clamp(0.5, 2.0)
-        } else {
+        let solve = |w: &[f64]| {
+            // Least squares over views of w·|P·R·Δt − target|², P dropping the z row.
+            let mut a = DMat3::ZERO;
+            let mut b = DVec3::ZERO;
+            for (&(rx, ry, tx, ty), &w) in rows.iter().zip(w) {
+                a += (DMat3::from_cols(rx * rx.x, rx * rx.y, rx * rx.z)
+                    + DMat3::from_cols(ry * ry.x, ry * ry.y, ry * ry.z))
+                    * w;
+                b += (rx * tx + ry * ty) * w;
+            }
+            // A little damping keeps one-view (depth-blind) fits well posed.
+            let damp = 1e-6 * (a.x_axis.x + a.y_axis.y + a.z_axis.z);
+            (a + DMat3::IDENTITY * damp).inverse() * b
+        };
+        let mut w = vec![1.0; rows.len()];
+        let mut dt = solve(&w);
+        if robust && rows.len() >= 3 {
+            for _ in 0..3 {
+                let e: Vec<f64> = rows
+                    .iter()
+                    .map(|&(rx, ry, tx, ty)| ((rx.dot(dt) - tx).powi(2) + (ry.dot(dt) - ty).powi(2)).sqrt())
+                    .collect();
+                let med = median(&e).max(1e-12);
+                w = e.iter().map(|&e| 1.0 / (1.0 + (e / (2.0 * med)).powi(2))).collect();
+                dt = solve(&w);
+            }
+        }
+        let ds = if !refit_scale {
             1.0
+        } else if robust && ratios.len() >= 3 {
+            median(&ratios).sqrt().clamp(0.5, 2.0)
+        } else {
+            (area_m / area_r).sqrt().clamp(0.5, 2.0)
         };
         // Scale about the object's centre, so the centre stays where it was moved to.
         let c_world = pose.apply(centre) + if dt.is_finite() { dt } else { DVec3::ZERO };
         pose.scale *= ds;
         pose.translation = c_world - pose.rotation * (pose.scale * centre);
     }
-    let score = targets
+    let ious: Vec<f64> = targets
         .iter()
         .map(|t| {
             let proj = project_mesh(mesh, &pose, &t.camera);
             render_bits_into(&proj, &mesh.triangles, &t.camera, bits);
             t.hard_iou(bits)
         })
-        .sum::<f64>()
-        / targets.len().max(1) as f64;
-    Candidate { pose, score }
+        .collect();
+    let score = ious.iter().sum::<f64>() / ious.len().max(1) as f64;
+    Candidate { pose, score, ious }
+}
+
+/// The median of a non-empty slice (0 for an empty one).
+fn median(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
 }
 
 /// The `keep` best candidates, at least `min_sep_deg` apart in rotation, best first.
@@ -166,6 +212,7 @@ mod tests {
                 ..Pose::IDENTITY
             },
             score,
+            ious: vec![score],
         };
         let best = select_best(vec![c(0.0, 0.9), c(10.0, 0.95), c(90.0, 0.5), c(200.0, 0.7)], 3, 30.0);
         let scores: Vec<f64> = best.iter().map(|c| c.score).collect();
