@@ -34,6 +34,7 @@ pub mod pose;
 pub mod raster;
 pub mod refine;
 pub mod result;
+pub mod shapes;
 pub mod so3;
 pub mod synth;
 pub mod view;
