@@ -4,6 +4,7 @@
 //! given the path as written relative to the scene (or mesh) file.
 
 pub mod bop;
+pub mod fileset;
 pub mod gltf;
 pub mod gltf_write;
 pub mod mask;
