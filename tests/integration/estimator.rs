@@ -1,13 +1,13 @@
 //! The whole pipeline: search + refinement recover known poses from no initial guess.
 
-use crate::fixture;
+use crate::{data, reference};
 use localisebot::estimator::{Estimator, FitSettings, Phase};
 use localisebot::metrics::pose_errors;
 use localisebot::synth::{synthesize, SynthSettings};
 use localisebot::{io, load_scene, Mesh, Pose};
 
 fn mesh(rel: &str) -> Mesh {
-    let path = fixture(rel);
+    let path = data(rel);
     let bytes = std::fs::read(&path).unwrap();
     let dir = path.parent().unwrap().to_path_buf();
     io::load_mesh(&path.to_string_lossy(), &bytes, &|u| std::fs::read(dir.join(u)).ok()).unwrap()
@@ -60,7 +60,7 @@ fn duck_is_found_from_no_initial_pose() {
 #[test]
 fn a_given_initial_pose_skips_the_search_and_is_refined() {
     // The PyTorch3D reference case: its init pose is 22° from the truth.
-    let dir = fixture("pytorch3d-case1/scene128");
+    let dir = reference("pytorch3d-case1/scene128");
     let text = std::fs::read_to_string(dir.join("scene.json")).unwrap();
     let scene = load_scene(&dir.join("scene.json").to_string_lossy(), &text, &|p| {
         std::fs::read(p).ok()

@@ -3,7 +3,7 @@
 //! (silhouettes, losses, gradient), the loss along a path to the true pose, and
 //! (printed, not asserted) timings.
 
-use crate::fixture;
+use crate::data;
 use glam::{DVec2, DVec3};
 use localisebot::loss::contour::ContourTarget;
 use localisebot::loss::iou::{soft_iou_loss, soft_iou_loss_grad};
@@ -16,7 +16,7 @@ use std::path::PathBuf;
 // ---------------------------------------------------------------- helpers
 
 fn load_case(size: u32) -> (Scene, Pose) {
-    let dir = fixture(&format!("pytorch3d-case1/scene{size}"));
+    let dir = crate::reference(&format!("pytorch3d-case1/scene{size}"));
     let text = std::fs::read_to_string(dir.join("scene.json")).unwrap();
     let d2 = dir.clone();
     let resolver = move |rel: &str| std::fs::read(d2.join(rel)).ok();
@@ -26,7 +26,7 @@ fn load_case(size: u32) -> (Scene, Pose) {
 }
 
 fn reference() -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(fixture("pytorch3d-case1/reference.json")).unwrap()).unwrap()
+    serde_json::from_str(&std::fs::read_to_string(crate::reference("pytorch3d-case1/reference.json")).unwrap()).unwrap()
 }
 
 fn read_f32(path: PathBuf) -> Vec<f64> {
@@ -497,7 +497,9 @@ fn soft_matches_the_pytorch3d_reference() {
         let mut worst_a = 0.0f64;
         let mut worst_l = 0.0f64;
         for (i, v) in views.iter().enumerate() {
-            let want = read_f32(fixture(&format!("pytorch3d-case1/soft_init_{size}_view{i}.f32")));
+            let want = read_f32(crate::reference(&format!(
+                "pytorch3d-case1/soft_init_{size}_view{i}.f32"
+            )));
             let alpha = &v.raster.silhouette().alpha;
             let d = max_abs_diff(alpha, &want);
             let sum: f64 = alpha.iter().sum();
@@ -661,7 +663,7 @@ fn soft_timings() {
         let s = SoftSettings::from_ndc(1e-4, size, size);
         time_views("blob", &scene.mesh, &init, &cams, &s);
     }
-    let duck_path = fixture("gltf/Duck/glTF-Binary/Duck.glb");
+    let duck_path = data("gltf/Duck/glTF-Binary/Duck.glb");
     match localisebot::io::load_mesh(
         "Duck.glb",
         &std::fs::read(&duck_path).unwrap(),
