@@ -18,7 +18,7 @@ export PATH="$HOME/.cargo/bin:$PATH"
 OUT=${1:-www/examples}
 SHARED=../shared/data
 cargo build --locked --release --bin localisebot
-B=target/release/localisebot
+B=${CARGO_TARGET_DIR:-target}/release/localisebot
 rm -rf "$OUT"
 mkdir -p "$OUT"
 ENTRIES=()

@@ -23,9 +23,9 @@ if (!existsSync(join(root, 'www', 'pkg', 'localisebot_bg.wasm'))) {
   process.exit(1);
 }
 const examplesDir = join(root, 'www', 'examples');
-const cli = join(root, 'target', 'release', 'localisebot');
+const cli = join(process.env.CARGO_TARGET_DIR ?? join(root, 'target'), 'release', 'localisebot');
 if (!existsSync(join(examplesDir, 'index.json')) || !existsSync(cli)) {
-  console.error('www/examples/ or target/release/localisebot is missing: run scripts/build-examples.sh first');
+  console.error(`www/examples/ or ${cli} is missing: run scripts/build-examples.sh first`);
   process.exit(1);
 }
 const toyDir = join(examplesDir, 'toy');
