@@ -1,10 +1,10 @@
 // Smoke test of the packed npm package: unpacks OUT_DIR/localisebot-*.tgz, checks its
-// file list and package.json, loads it in Node (initSync) and fits the 3-view Avocado
-// scene of tests/fixtures/scenes. Prints "N passed, N failed".
+// file list and package.json, loads it in Node (initSync) and fits the web page's toy
+// example (www/examples/toy, made by scripts/build-examples.sh). Prints "N passed, N failed".
 //
 //   node pkg-config/smoke.mjs [OUT_DIR]     # default target/npm (see pkg-config/build.sh)
 import { execFileSync } from 'node:child_process';
-import { mkdtempSync, readFileSync, readdirSync, rmSync } from 'node:fs';
+import { existsSync, mkdtempSync, readFileSync, readdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join } from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
@@ -45,26 +45,31 @@ await test(`${tgz} holds the module, its types, the wasm and the README`, () => 
   const cargoVersion = readFileSync(join(root, 'Cargo.toml'), 'utf8').match(/^version = "(.*)"/m)[1];
   assert.equal(pkg.version, cargoVersion);
   const dts = readFileSync(join(pkgDir, 'localisebot.d.ts'), 'utf8');
-  for (const name of ['class Session', 'class SessionBuilder', 'class FileSet', 'interface Progress', 'interface FitResult'])
+  for (const name of ['class Session', 'class SessionBuilder', 'class FileSet', 'interface Progress', 'interface FitResult',
+    'function sceneFiles', 'static fromFiles'])
     assert.ok(dts.includes(name), `the TypeScript declarations lack ${name}`);
 });
 
 await test('the package loads in Node and fits a scene', async () => {
   const lib = await import(pathToFileURL(join(pkgDir, 'localisebot.js')).href);
   lib.initSync({ module: readFileSync(join(pkgDir, 'localisebot_bg.wasm')) });
-  const scene = join(root, 'tests', 'fixtures', 'scenes', 'avocado-3view');
+  const scene = join(root, 'www', 'examples', 'toy');
+  if (!existsSync(join(scene, 'scene.json'))) throw new Error(`${scene} is missing: run scripts/build-examples.sh first`);
+  const text = readFileSync(join(scene, 'scene.json'), 'utf8');
   const files = new lib.FileSet();
-  for (const f of ['avocado.gltf', 'avocado.bin', 'masks/view0.png', 'masks/view1.png', 'masks/view2.png'])
-    files.add(f, readFileSync(join(scene, f)));
-  const session = lib.Session.fromScene('scene.json', readFileSync(join(scene, 'scene.json'), 'utf8'), files);
+  for (const f of lib.sceneFiles('scene.json', text)) files.add(f, readFileSync(join(scene, f)));
+  assert.equal(files.length, 9, 'the mesh, 4 masks and 4 images');
+  const session = lib.Session.fromScene('scene.json', text, files);
   let progress;
   while (!session.done) progress = session.stepFor(50);
   assert.equal(progress.phase, 'done');
   const result = session.result();
-  assert.equal(result.views.length, 3);
+  assert.equal(result.views.length, 4);
+  assert.ok(result.errors.rotation_deg < 5, `rotation error ${result.errors.rotation_deg}°`);
   assert.ok(result.mean_iou >= 0.95, `mean IoU ${result.mean_iou}`);
   assert.throws(() => lib.Session.fromScene('scene.json', '{"mesh": 1}', new lib.FileSet()), (e) =>
     e instanceof Error && e.message.startsWith('scene.json:'));
+  assert.throws(() => lib.Session.fromFiles(new lib.FileSet()), (e) => e instanceof Error && e.message === 'no files were given');
   console.log(`  fitted in ${session.seconds.toFixed(2)} s, mean IoU ${result.mean_iou.toFixed(3)}`);
 });
 

@@ -15,5 +15,5 @@ if ! wasm-bindgen --version 2>/dev/null | grep -qx "wasm-bindgen ${WB:-0.2.130}"
 fi
 cargo build --locked --release --lib --target wasm32-unknown-unknown
 rm -rf "$OUT"
-wasm-bindgen --target web --out-dir "$OUT" target/wasm32-unknown-unknown/release/localisebot.wasm
+wasm-bindgen --target web --out-dir "$OUT" "${CARGO_TARGET_DIR:-target}/wasm32-unknown-unknown/release/localisebot.wasm"
 echo "built $OUT ($(du -k "$OUT/localisebot_bg.wasm" | cut -f1) KiB of wasm)"

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# The README's first command: builds the wasm package into www/pkg/ and serves www/
-# on http://127.0.0.1:8080/ (PORT=... to change), where "Load example" is one click
-# away. Installs the wasm target and the matching wasm-bindgen CLI first if missing
-# (a few minutes, once). Ctrl-C stops the server.
+# The README's first command: builds the wasm package into www/pkg/ and the page's
+# examples into www/examples/ (scripts/build-examples.sh: the procedural toy aeroplane,
+# and the Duck when ../shared sits beside the repository), then serves www/ on
+# http://127.0.0.1:8080/ (PORT=... to change), where "Load example" is one click away.
+# Installs the wasm target and the matching wasm-bindgen CLI first if missing (a few
+# minutes, once). Ctrl-C stops the server.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
@@ -14,6 +16,7 @@ if ! wasm-bindgen --version 2>/dev/null | grep -qx "wasm-bindgen ${WB:-0.2.130}"
   cargo install wasm-bindgen-cli --version "${WB:-0.2.130}"
 fi
 bash scripts/build-wasm.sh
+bash scripts/build-examples.sh
 PORT=${PORT:-8080}
 echo "LocaliseBot: open http://127.0.0.1:$PORT/ and click 'Load example' (Ctrl-C stops the server)"
 exec node scripts/serve.mjs --root www --host 127.0.0.1 --port "$PORT"

@@ -1,30 +1,73 @@
 #!/usr/bin/env bash
-# The whole test suite: formatting, clippy, native tests, the wasm32 build.
-set -euo pipefail
+# The whole test suite: formatting, clippy, native tests, the wasm32 build, the wasm
+# tests in headless Chromium and Node, the web page end to end (after building the
+# wasm package and the page's examples), the npm package.
+#
+# Every step runs even when an earlier one failed, and the failures are listed at the
+# end (exit status 1). Tests that read the shared third-party data (`../shared`,
+# beside the repository) fail, with a message naming the folder, when it is missing;
+# nothing is skipped.
+set -uo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
 
-echo "== cargo fmt --check"
-cargo fmt --all -- --check
-echo "== cargo clippy"
-cargo clippy --all-targets --locked -- -D warnings
-echo "== native tests"
-cargo test --locked
-echo "== wasm32 build of the library"
-cargo build --locked --lib --release --target wasm32-unknown-unknown
-echo "== wasm tests in headless Chromium and in Node"
-if command -v wasm-pack >/dev/null; then
-  # wasm-pack uses the wasm-bindgen-test-runner on PATH when its version matches Cargo.lock.
-  wasm-pack test --headless --chrome --chromedriver "$(command -v chromedriver)" -- --locked --test wasm
-  wasm-pack test --node -- --locked --test wasm_node
-else
-  echo "(wasm-pack not installed: running wasm-bindgen-test-runner directly)"
-  CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner \
-    cargo test --locked --target wasm32-unknown-unknown --test wasm --test wasm_node
+SHARED_NOTE=""
+if [ ! -d ../shared/data ]; then
+  SHARED_NOTE="../shared (the shared third-party data: data/, reference/) is not beside the repository at $(cd .. && pwd)/shared: the tests that read it fail."
+  echo "warning: $SHARED_NOTE" >&2
 fi
-echo "== the web page, end to end (Playwright + Chromium)"
-bash scripts/build-wasm.sh
-node tests/e2e/page.test.mjs
-echo "== the npm package (pkg-config/): build, npm pack, load in Node"
-bash pkg-config/build.sh
-node pkg-config/smoke.mjs
+
+FAILED=()
+step() { # step NAME COMMAND...
+  local name=$1
+  shift
+  echo "== $name"
+  if ! "$@"; then
+    FAILED+=("$name")
+    echo "!! FAILED: $name" >&2
+  fi
+}
+
+wasm_tests() { # wasm_tests (browser|node) TEST_TARGET...
+  local where=$1
+  shift
+  local tests=()
+  for t in "$@"; do tests+=(--test "$t"); done
+  if command -v wasm-pack >/dev/null; then
+    # wasm-pack uses the wasm-bindgen-test-runner on PATH when its version matches Cargo.lock.
+    if [ "$where" = browser ]; then
+      wasm-pack test --headless --chrome --chromedriver "$(command -v chromedriver)" -- --locked "${tests[@]}"
+    else
+      wasm-pack test --node -- --locked "${tests[@]}"
+    fi
+  else
+    echo "(wasm-pack not installed: running wasm-bindgen-test-runner directly)"
+    CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner \
+      cargo test --locked --target wasm32-unknown-unknown "${tests[@]}"
+  fi
+}
+
+step "cargo fmt --check" cargo fmt --all -- --check
+step "cargo clippy" cargo clippy --all-targets --locked -- -D warnings
+step "native tests" cargo test --locked --no-fail-fast
+step "wasm32 build of the library" cargo build --locked --lib --release --target wasm32-unknown-unknown
+step "wasm tests in headless Chromium" wasm_tests browser wasm
+step "wasm tests in Node" wasm_tests node wasm_node
+# Real glTF files of ../shared compiled in with include_bytes!: without ../shared this
+# suite does not build, and the compiler names the missing file.
+step "wasm tests in Node on the shared glTF files" wasm_tests node wasm_shared
+step "the wasm package (www/pkg)" bash scripts/build-wasm.sh
+step "the page's examples (www/examples)" bash scripts/build-examples.sh
+step "the web page, end to end (Playwright + Chromium)" node tests/e2e/page.test.mjs
+step "the npm package (pkg-config/): build, npm pack, load in Node" \
+  bash -c 'bash pkg-config/build.sh && node pkg-config/smoke.mjs'
+
+echo
+if [ ${#FAILED[@]} -eq 0 ]; then
+  echo "all steps passed"
+  exit 0
+fi
+echo "FAILED steps (${#FAILED[@]}):" >&2
+printf '  - %s\n' "${FAILED[@]}" >&2
+[ -n "$SHARED_NOTE" ] && echo "note: $SHARED_NOTE" >&2
+exit 1

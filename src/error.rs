@@ -109,6 +109,10 @@ pub enum Error {
     /// Settings or arguments out of range.
     #[error("invalid setting: {0}")]
     Settings(String),
+    /// A set of dropped or chosen files does not make one scene (none given, several
+    /// scene files or meshes, a view without a mask…).
+    #[error("{0}")]
+    Files(String),
 }
 
 /// Result with the crate's [`Error`].

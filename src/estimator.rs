@@ -81,7 +81,7 @@ impl Default for FitSettings {
             lambda_iou: 1.0,
             lambda_contour: 1.0,
             scale_mode: ScaleMode::Anisotropic,
-            window: WindowMode::Object { margin: 0.3 },
+            window: WindowMode::Object { margin: OBJECT_MARGIN },
             tolerance: 1e-3,
             verdict: VerdictThresholds::default(),
             robust: true,
@@ -90,6 +90,11 @@ impl Default for FitSettings {
 }
 
 impl FitSettings {
+    /// The default object window (a square around the mask, 30 % margin on each side).
+    pub fn window_object_default(&self) -> WindowMode {
+        WindowMode::Object { margin: OBJECT_MARGIN }
+    }
+
     /// Checks ranges.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::Settings(m));
@@ -247,6 +252,9 @@ struct Final {
     views: Vec<ViewFigures>,
     judgement: Judgement,
 }
+
+/// The default object window's margin on each side, as a fraction of the mask's box.
+pub const OBJECT_MARGIN: f64 = 0.3;
 
 /// Search candidates scored per step.
 const SEARCH_BATCH: usize = 16;
@@ -583,10 +591,11 @@ impl Estimator {
         let mut scored: Vec<(f64, Track)> = std::mem::take(&mut self.tracks)
             .into_iter()
             .map(|mut t| {
+                // Ranked by the mean over all views (not the candidate's own weights:
+                // candidates must be compared on the same footing).
                 t.pose = t.best_pose;
                 let ious = objective.hard_ious(&self.mesh, &t.pose);
-                let wsum = t.weights.iter().sum::<f64>().max(1e-300);
-                (ious.iter().zip(&t.weights).map(|(i, w)| i * w).sum::<f64>() / wsum, t)
+                (ious.iter().sum::<f64>() / ious.len().max(1) as f64, t)
             })
             .collect();
         scored.sort_by(|a, b| b.0.total_cmp(&a.0));

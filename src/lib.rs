@@ -33,6 +33,7 @@ pub mod overlay;
 pub mod pose;
 pub mod raster;
 pub mod result;
+pub mod shapes;
 pub mod so3;
 pub mod symmetry;
 pub mod synth;

@@ -14,6 +14,8 @@ use glam::{DMat3, DQuat, DVec3};
 use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 
+pub use crate::shapes::blob_mesh;
+
 /// How to make a synthetic scene.
 #[derive(Debug, Clone)]
 pub struct SynthSettings {
@@ -198,62 +200,9 @@ pub fn synthesize(mesh: &Mesh, settings: &SynthSettings, pose: Option<Pose>) -> 
     })
 }
 
-/// A closed, asymmetric, bumpy "blob" (a deformed UV sphere of radius about 1) with
-/// `2·n_lon·(n_lat − 1)` triangles — the benchmark's meshes of chosen sizes.
-/// `n_lat ≥ 3` rings of latitude (poles included), `n_lon ≥ 3` meridians.
-pub fn blob_mesh(n_lat: usize, n_lon: usize) -> Mesh {
-    let (n_lat, n_lon) = (n_lat.max(3), n_lon.max(3));
-    let mut positions = Vec::with_capacity(2 + (n_lat - 2) * n_lon);
-    let radius = |d: DVec3| {
-        1.0 + 0.25 * (2.0 * d.x + 0.5).sin() * (1.5 * d.y).cos() + 0.15 * (3.0 * d.z + d.x).sin() + 0.2 * d.x.max(0.0)
-    };
-    positions.push(DVec3::Y * radius(DVec3::Y));
-    for i in 1..n_lat - 1 {
-        let theta = std::f64::consts::PI * i as f64 / (n_lat - 1) as f64;
-        for j in 0..n_lon {
-            let phi = std::f64::consts::TAU * j as f64 / n_lon as f64;
-            let d = DVec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
-            positions.push(d * radius(d));
-        }
-    }
-    positions.push(-DVec3::Y * radius(-DVec3::Y));
-    let last = positions.len() as u32 - 1;
-    let ring = |i: usize, j: usize| (1 + (i - 1) * n_lon + j % n_lon) as u32;
-    let mut triangles = Vec::with_capacity(2 * n_lon * (n_lat - 2));
-    for j in 0..n_lon {
-        triangles.push([0, ring(1, j + 1), ring(1, j)]);
-        triangles.push([last, ring(n_lat - 2, j), ring(n_lat - 2, j + 1)]);
-    }
-    for i in 1..n_lat - 2 {
-        for j in 0..n_lon {
-            triangles.push([ring(i, j), ring(i, j + 1), ring(i + 1, j)]);
-            triangles.push([ring(i, j + 1), ring(i + 1, j + 1), ring(i + 1, j)]);
-        }
-    }
-    Mesh { positions, triangles }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn blob_has_the_promised_size_and_is_closed() {
-        for (lat, lon) in [(11, 25), (21, 50)] {
-            let m = blob_mesh(lat, lon);
-            assert_eq!(m.triangles.len(), 2 * lon * (lat - 2));
-            m.validate("blob").unwrap();
-            // Closed: every edge is shared by exactly two triangles.
-            let mut edges = std::collections::HashMap::new();
-            for t in &m.triangles {
-                for k in 0..3 {
-                    let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
-                    *edges.entry((a, b)).or_insert(0) += 1;
-                }
-            }
-            assert!(edges.values().all(|&c| c == 2));
-        }
-    }
 
     #[test]
     fn synthetic_scene_keeps_the_object_inside_every_view() {

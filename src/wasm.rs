@@ -1,6 +1,8 @@
 //! The WebAssembly binding (wasm32 only): `#[wasm_bindgen]` types over the core, no
-//! maths. JavaScript builds a [`Session`] from a `scene.json` and its files (a
-//! [`FileSet`], matched by path, then by file name), or piece by piece with a
+//! maths. JavaScript builds a [`Session`] from whatever files were dropped (a
+//! [`FileSet`]; `Session.fromFiles` decides which is the scene, the mesh, each view's
+//! mask and image, by the policy of `io::fileset`), from a `scene.json` and its files,
+//! or piece by piece with a
 //! [`SessionBuilder`] (a mesh's bytes, then each view's camera, mask as PNG bytes or
 //! RGBA pixels, and image). It then steps the fit (`step(n)`, `stepFor(ms)`) and
 //! reads the progress (phase, iteration, loss, per-view IoU, pose), each view's
@@ -9,7 +11,8 @@
 //! Every core [`Error`](crate::Error) reaches JavaScript as an `Error` carrying its message; nothing
 //! here panics on user input (the panic hook only logs bugs to the console).
 //!
-//! - `files`: [`FileSet`], files by path, matched to a scene's entries;
+//! - `files`: [`FileSet`] (a wrapper of `io::fileset::FileSet`), `checkMesh`,
+//!   `sceneFiles` and `meshFiles` (what a scene or a glTF names);
 //! - `builder`: [`SessionBuilder`], a session from parts;
 //! - `session`: [`Session`], the fit as JavaScript drives it.
 
@@ -18,7 +21,7 @@ mod files;
 mod session;
 
 pub use builder::SessionBuilder;
-pub use files::{check_mesh, FileRole, FileSet};
+pub use files::{check_mesh, mesh_files, scene_files, FileRole, FileSet, Plan};
 pub use session::Session;
 
 use serde::Serialize;

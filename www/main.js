@@ -3,7 +3,7 @@
 // view, the loss curve, the pose, the status).
 const $ = (id) => document.getElementById(id);
 const ui = {
-  drop: $('drop'), input: $('file-input'), example: $('load-example'),
+  drop: $('drop'), input: $('file-input'), example: $('load-example'), choice: $('example-choice'),
   start: $('start'), pause: $('pause'), step: $('step'), reset: $('reset'), download: $('download'),
   status: $('status'), rate: $('rate'), error: $('error'), notice: $('notice'), views: $('views'), loss: $('loss'),
 };
@@ -22,6 +22,8 @@ function startWorker() {
   worker.onerror = (e) => {
     e.preventDefault();
     showError(`the worker failed to start: ${e.message || 'could the wasm package (www/pkg/) be missing?'}`);
+    if (state === 'running') state = 'paused';
+    updateButtons();
   };
 }
 
@@ -49,6 +51,8 @@ const handlers = {
     a.remove();
     setTimeout(() => URL.revokeObjectURL(url), 10_000);
   },
+  // A load that failed, or a fitting slice that threw: the worker has stopped; the
+  // message is shown and the controls are usable again.
   error(msg) {
     showError(msg.message);
     if (state === 'running') state = 'paused';
@@ -117,12 +121,29 @@ window.addEventListener('drop', (e) => {
 });
 
 // ---- controls -----------------------------------------------------------------
+// The examples scripts/build-examples.sh made: examples/index.json lists them.
+async function listExamples() {
+  const res = await fetch(new URL('./examples/index.json', import.meta.url));
+  if (!res.ok) throw new Error(`examples/index.json: HTTP ${res.status}`);
+  const { examples } = await res.json();
+  ui.choice.replaceChildren(
+    ...examples.map(({ id, title, path }) => Object.assign(new Option(title, path), { id: `example-${id}` })),
+  );
+  const toy = examples.findIndex((e) => e.id === 'toy');
+  ui.choice.selectedIndex = Math.max(toy, 0);
+  ui.example.disabled = ui.choice.disabled = examples.length === 0;
+}
+listExamples().catch((e) => {
+  ui.status.textContent = `No examples (${e.message}): run scripts/build-examples.sh, or drop your files.`;
+});
+
 ui.example.addEventListener('click', () => {
   clearError();
-  ui.status.textContent = 'loading the example…';
-  send('example');
+  ui.status.textContent = `loading the example ${ui.choice.selectedOptions[0]?.text ?? ''}…`;
+  send('example', { path: ui.choice.value });
 });
 ui.start.addEventListener('click', () => {
+  clearError();
   state = 'running';
   paints = [];
   updateButtons();

@@ -1,9 +1,11 @@
 // The fit's home: a module Web Worker that owns the wasm Session, so the page never
-// waits for it. Messages in: load {files}, example, start, pause, step, reset,
-// result. Messages out: loaded {views, warnings}, frame {progress, losses, overlays, running},
-// result {json}, error {message, fatal}.
-import init, { FileSet, Session, checkMesh } from './pkg/localisebot.js';
-import { planScene } from './files.js';
+// waits for it. Which dropped file is the scene, the mesh, a mask or an image is
+// decided in Rust (Session.fromFiles); this file only moves bytes and messages.
+// Messages in: load {files}, example {path}, start, pause, step, reset, result.
+// Messages out: loaded {views, warnings}, frame {progress, losses, overlays, running},
+// result {json}, error {message, fatal}. Every error — a load, a command, or a slice
+// of the fitting loop — is caught and posted as an error, and the loop stops.
+import init, { FileSet, Session, sceneFiles, meshFiles } from './pkg/localisebot.js';
 
 const BUDGET_MS = 30; // work per frame: about 30 frames a second while fitting
 const ready = init();
@@ -12,73 +14,72 @@ let running = false;
 
 const post = (msg, transfer = []) => postMessage(msg, transfer);
 
+// Stops the loop and tells the page. A WebAssembly.RuntimeError is a bug (a trap):
+// the page then starts a fresh worker rather than trust this instance.
+function fail(e) {
+  running = false;
+  const fatal = e instanceof WebAssembly.RuntimeError;
+  post({ type: 'error', message: e?.message ?? String(e), fatal, running: false });
+}
+
 // Sends the current state: progress, loss trace and every view's overlay.
 function frame(progress = session.progress()) {
   const losses = session.losses();
   const overlays = [];
-  for (let i = 0; i < session.viewCount; i++) {
-    const px = session.overlay(i);
-    overlays.push(px.buffer);
-  }
+  for (let i = 0; i < session.viewCount; i++) overlays.push(session.overlay(i).buffer);
   post({ type: 'frame', progress, losses, overlays, running }, [losses.buffer, ...overlays]);
 }
 
-function fileSet(files) {
-  const set = new FileSet();
-  for (const f of files) set.add(f.path, f.bytes);
-  return set;
-}
-
+// files: [{ path, bytes }], as dropped or fetched.
 function load(files) {
   running = false;
-  const plan = planScene(files);
-  const set = fileSet(files);
+  const set = new FileSet();
   try {
-    if (plan.meshOnly) {
-      const { path, bytes } = plan.meshOnly;
-      const triangles = checkMesh(path, bytes, set); // throws on a bad mesh
-      throw new Error(
-        `${path}: a valid mesh (${triangles} triangles), but there is no scene: ` +
-          'add a scene.json (or one camera .json per view) and the masks',
-      );
-    }
-    const next = Session.fromScene(plan.sceneFile, plan.sceneText, set);
+    for (const f of files) set.add(f.path, f.bytes);
+    const next = Session.fromFiles(set); // throws an Error naming what is missing
     session?.free();
     session = next;
   } finally {
     set.free();
   }
-  post({ type: 'loaded', views: session.views(), warnings: session.warnings(), source: plan.sceneFile });
+  post({ type: 'loaded', views: session.views(), warnings: session.warnings() });
   frame();
 }
 
-// The bundled example: www/example/scene.json and the files it names.
-async function example() {
-  const base = new URL('./example/', import.meta.url);
-  const get = async (path) => {
-    const res = await fetch(new URL(path, base));
-    if (!res.ok) throw new Error(`example/${path}: HTTP ${res.status}`);
-    return { path: `example/${path}`, bytes: new Uint8Array(await res.arrayBuffer()) };
+// An example of www/examples/ (see scripts/build-examples.sh): its scene.json, at
+// `path` relative to examples/, and the files the scene and its mesh name.
+async function example(path) {
+  const base = new URL('./examples/', import.meta.url);
+  const get = async (p) => {
+    const res = await fetch(new URL(p, base));
+    if (!res.ok) throw new Error(`examples/${p}: HTTP ${res.status}`);
+    return { path: p, bytes: new Uint8Array(await res.arrayBuffer()) };
   };
-  const sceneFile = await get('scene.json');
-  const scene = JSON.parse(new TextDecoder().decode(sceneFile.bytes));
-  const paths = [scene.mesh, ...scene.views.flatMap((v) => (v.image ? [v.mask, v.image] : [v.mask]))];
-  return [sceneFile, ...(await Promise.all(paths.map(get)))];
+  const scene = await get(path);
+  const [meshPath, ...others] = sceneFiles(path, new TextDecoder().decode(scene.bytes));
+  const mesh = await get(meshPath);
+  const rest = await Promise.all([...meshFiles(meshPath, mesh.bytes), ...others].map(get));
+  return [scene, mesh, ...rest];
 }
 
 // Runs the fit in slices of BUDGET_MS, yielding between them so that pause and
-// step messages get in.
+// step messages get in. A slice that throws ends the run with an error message.
 function run() {
   if (!running || !session) return;
-  const progress = session.stepFor(BUDGET_MS);
-  if (progress.done) running = false;
-  frame(progress);
+  try {
+    const progress = session.stepFor(BUDGET_MS);
+    if (progress.done) running = false;
+    frame(progress);
+  } catch (e) {
+    fail(e);
+    return;
+  }
   if (running) setTimeout(run, 0);
 }
 
 const handlers = {
   load: (msg) => load(msg.files),
-  example: async () => load(await example()),
+  example: async (msg) => load(await example(msg.path)),
   start: () => {
     if (!session || session.done || running) return;
     running = true;
@@ -107,9 +108,6 @@ onmessage = async ({ data }) => {
     await ready;
     await handlers[data.type]?.(data);
   } catch (e) {
-    running = false;
-    // A WebAssembly.RuntimeError is a bug (a trap): the instance cannot be trusted.
-    const fatal = e instanceof WebAssembly.RuntimeError;
-    post({ type: 'error', message: e?.message ?? String(e), fatal });
+    fail(e);
   }
 };

@@ -3,17 +3,22 @@
 //! configurations, and seconds of a full fit from no initial pose; or the same
 //! forward + backward on a given scene at a given pose.
 
-use super::files::{load_pose, load_scene_file, CliResult};
+use super::files::{load_mesh, load_pose, load_scene_file, CliResult};
 use localisebot::estimator::{Estimator, FitSettings};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::loss::target::Window;
 use localisebot::raster::soft::SoftSettings;
 use localisebot::synth::{blob_mesh, synthesize, SynthSettings};
-use localisebot::{io, Mesh, Pose, View};
+use localisebot::{Mesh, Pose, View};
 use std::path::PathBuf;
 use std::time::Instant;
 
-const DUCK: &[u8] = include_bytes!("../../tests/fixtures/gltf/Duck/glTF-Binary/Duck.glb");
+/// The benchmark's Duck (Khronos sample), read at run time where the shared
+/// third-party data sits: `../shared` beside the repository.
+const DUCK: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../shared/data/gltf/Duck/glTF-Binary/Duck.glb"
+);
 
 /// Arguments of `bench`.
 #[derive(clap::Args)]
@@ -36,6 +41,10 @@ pub struct BenchArgs {
     /// Skip the full fits (forward + backward figures only).
     #[arg(long)]
     no_fit: bool,
+    /// The Duck mesh of the fixed configurations (default: the shared data's
+    /// `Duck.glb`, in `../shared` beside the repository).
+    #[arg(long, default_value = DUCK)]
+    duck: PathBuf,
 }
 
 struct Row {
@@ -79,7 +88,14 @@ pub fn run(a: &BenchArgs) -> CliResult {
             fit_iou: None,
         });
     } else {
-        let duck = io::load_mesh("Duck.glb", DUCK, &io::no_files).map_err(|e| e.to_string())?;
+        if !a.duck.is_file() {
+            return Err(format!(
+                "{}: not found: the benchmark's Duck is read from the shared data folder `shared`, \
+                 which must sit beside the repository, or from --duck PATH",
+                a.duck.display()
+            ));
+        }
+        let duck = load_mesh(&a.duck)?;
         let meshes = [
             ("blob500".to_string(), blob_mesh(12, 25)),
             ("blob2k".to_string(), blob_mesh(22, 50)),

@@ -55,6 +55,22 @@ pub struct FitOptions {
     /// How the scale is fitted (default anisotropic).
     #[arg(long, value_enum)]
     pub scale: Option<ScaleArg>,
+    /// Each view's working window: `object` (a square around its mask, the default)
+    /// or `full` (the whole image).
+    #[arg(long, value_enum)]
+    pub window: Option<WindowArg>,
+    /// Trust every view: no down-weighting of a view that contradicts the others.
+    #[arg(long)]
+    pub no_robust: bool,
+}
+
+/// `--window`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum WindowArg {
+    /// A square around each view's mask (30 % margin): resolutions count across the object.
+    Object,
+    /// The whole image.
+    Full,
 }
 
 impl FitOptions {
@@ -91,6 +107,15 @@ impl FitOptions {
                 ScaleArg::Isotropic => ScaleMode::Isotropic,
                 ScaleArg::Fixed => ScaleMode::Fixed,
             };
+        }
+        if let Some(w) = self.window {
+            s.window = match w {
+                WindowArg::Object => s.window_object_default(),
+                WindowArg::Full => localisebot::loss::target::WindowMode::Full,
+            };
+        }
+        if self.no_robust {
+            s.robust = false;
         }
         s.validate().map_err(|e| e.to_string())?;
         Ok(s)

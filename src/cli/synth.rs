@@ -1,20 +1,32 @@
 //! `localisebot synth`: a synthetic scene folder from a mesh — `scene.json` with its
-//! `ground_truth_pose`, `masks/*.png` and a copy of the mesh (with its `.bin` buffers).
+//! `ground_truth_pose`, `masks/*.png` and a copy of the mesh (with its `.bin` buffers),
+//! or from one of the project's procedural shapes (`--shape toy`), written as `.glb`,
+//! `.gltf` + `.bin` or `.ply`. The web page's examples are made this way
+//! (`scripts/build-examples.sh`).
 
 use super::files::{load_mesh, load_pose, read, write, CliResult};
 use clap::Args;
 use localisebot::grasp::antipodal_grasps;
 use localisebot::io::png::{encode_gray, encode_rgba};
+use localisebot::io::{gltf_write, ply};
 use localisebot::synth::{synthesize, SynthSettings};
+use localisebot::{shapes, Mesh};
 use localisebot::{CameraJson, PoseJson, SceneJson, ViewJson};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `synth`.
 #[derive(Args)]
 pub struct SynthArgs {
-    /// Mesh file (.glb, .gltf, .obj, .ply).
-    #[arg(long)]
-    mesh: PathBuf,
+    /// Mesh file (.glb, .gltf, .obj, .ply), copied into the scene folder.
+    #[arg(long, required_unless_present = "shape", conflicts_with = "shape")]
+    mesh: Option<PathBuf>,
+    /// A procedural shape instead of a mesh file: toy (an aeroplane, 0.32 m long),
+    /// blob or cube; written into the scene folder as NAME.glb (see --mesh-format).
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(shapes::NAMES))]
+    shape: Option<String>,
+    /// How to write a --shape: glb, gltf (NAME.gltf + NAME.bin) or ply (ASCII).
+    #[arg(long, requires = "shape", value_parser = clap::builder::PossibleValuesParser::new(["glb", "gltf", "ply"]))]
+    mesh_format: Option<String>,
     /// Number of views.
     #[arg(long, default_value_t = 4)]
     views: usize,
@@ -49,7 +61,17 @@ pub struct SynthArgs {
 
 /// Runs `synth`.
 pub fn run(a: &SynthArgs) -> CliResult {
-    let mesh = load_mesh(&a.mesh)?;
+    if a.shape.is_none() && a.mesh_format.is_some() {
+        return Err("--mesh-format writes a --shape: it does not convert a --mesh".into());
+    }
+    let (mesh, source) = match (&a.shape, &a.mesh) {
+        (Some(name), _) => (
+            shapes::by_name(name).ok_or_else(|| format!("unknown shape '{name}'"))?,
+            name.clone(),
+        ),
+        (None, Some(path)) => (load_mesh(path)?, path.display().to_string()),
+        (None, None) => return Err("give --mesh FILE or --shape NAME".into()),
+    };
     let pose = a.pose.as_deref().map(load_pose).transpose()?;
     let settings = SynthSettings {
         views: a.views,
@@ -60,12 +82,15 @@ pub fn run(a: &SynthArgs) -> CliResult {
         ..Default::default()
     };
     let scene = synthesize(&mesh, &settings, pose).map_err(|e| e.to_string())?;
-    let mesh_name = copy_mesh(&a.mesh, &a.out)?;
+    let mesh_name = match (&a.shape, &a.mesh) {
+        (Some(name), _) => write_shape(&mesh, name, a.mesh_format.as_deref().unwrap_or("glb"), &a.out)?,
+        (None, Some(path)) => copy_mesh(path, &a.out)?,
+        (None, None) => unreachable!("checked above"),
+    };
     let grasps = antipodal_grasps(&mesh, mesh.diameter(), a.grasps, a.seed);
     if grasps.len() < a.grasps {
         eprintln!(
-            "warning: {}: found {} of {} antipodal grasps",
-            a.mesh.display(),
+            "warning: {source}: found {} of {} antipodal grasps",
             grasps.len(),
             a.grasps
         );
@@ -134,6 +159,28 @@ fn parse_occlusion(s: &str) -> Result<(usize, f64), String> {
         return Err(format!("the occluded fraction must be in [0, 1), got {f}"));
     }
     Ok((v, f))
+}
+
+/// Writes a procedural shape into `out` as `NAME.glb`, `NAME.gltf` + `NAME.bin` or
+/// `NAME.ply`; returns the mesh's file name.
+fn write_shape(mesh: &Mesh, name: &str, format: &str, out: &Path) -> CliResult<String> {
+    let file = format!("{name}.{format}");
+    let err = |e: localisebot::Error| e.to_string();
+    match format {
+        "glb" => write(&out.join(&file), &gltf_write::glb(mesh, &file).map_err(err)?)?,
+        "gltf" => {
+            let bin = format!("{name}.bin");
+            let (text, bytes) = gltf_write::gltf_and_bin(mesh, &file, &bin).map_err(err)?;
+            write(&out.join(&file), text.as_bytes())?;
+            write(&out.join(&bin), &bytes)?;
+        }
+        "ply" => write(
+            &out.join(&file),
+            &ply::write_ascii(mesh, &format!("localisebot procedural shape '{name}'")),
+        )?,
+        other => return Err(format!("--mesh-format: unknown format '{other}'")),
+    }
+    Ok(file)
 }
 
 /// Copies the mesh file, and a `.gltf`'s external buffers and images, into `out`.

@@ -1,10 +1,12 @@
-//! Bytes in, core types out (and back): meshes (glTF, OBJ), masks and images (PNG),
+//! Bytes in, core types out (and back): meshes (glTF, OBJ, PLY; glTF and PLY written), masks and images (PNG),
 //! scene files (SPEC §3). Nothing here touches the file system: files the data
 //! refers to are asked for through a resolver closure, `&dyn Fn(&str) -> Option<Vec<u8>>`,
 //! given the path as written relative to the scene (or mesh) file.
 
 pub mod bop;
+pub mod fileset;
 pub mod gltf;
+pub mod gltf_write;
 pub mod mask;
 pub mod nerf;
 pub mod obj;

@@ -73,6 +73,13 @@ impl Session {
         })
     }
 
+    fn from_loaded(scene: crate::io::scene::Scene, warnings: Vec<String>) -> Result<Session> {
+        let mut session = Session::new(scene.mesh, scene.views, scene.initial_pose, scene.ground_truth_pose)?;
+        session.warnings = warnings;
+        session.grasps = scene.grasps;
+        Ok(session)
+    }
+
     /// The estimator.
     pub fn estimator(&self) -> &Estimator {
         &self.est
@@ -132,10 +139,17 @@ impl Session {
     #[wasm_bindgen(js_name = fromScene)]
     pub fn from_scene(scene_file: &str, scene_text: &str, files: &FileSet) -> Result<Session, JsError> {
         let (scene, warnings) = files.load_scene(scene_file, scene_text)?;
-        let mut session = Session::new(scene.mesh, scene.views, scene.initial_pose, scene.ground_truth_pose)?;
-        session.warnings = warnings;
-        session.grasps = scene.grasps;
-        Ok(session)
+        Ok(Session::from_loaded(scene, warnings)?)
+    }
+
+    /// A session from dropped or chosen files, whatever they are: a `scene.json` and
+    /// the files it names, or one camera JSON per view with masks (and images) and the
+    /// mesh; which file is which is decided in Rust (`io::fileset`). Throws an `Error`
+    /// naming what is missing or ambiguous, or, for a mesh alone, that it lacks a scene.
+    #[wasm_bindgen(js_name = fromFiles)]
+    pub fn from_files(files: &FileSet) -> Result<Session, JsError> {
+        let (scene, warnings, _) = files.inner().load()?;
+        Ok(Session::from_loaded(scene, warnings)?)
     }
 
     /// The number of views.

@@ -1,12 +1,14 @@
 // End-to-end test of the web page (www/): playwright-core drives Debian's Chromium
-// against scripts/serve.mjs on a free port. Needs www/pkg/ (scripts/build-wasm.sh).
+// against scripts/serve.mjs on a free port. Needs www/pkg/ (scripts/build-wasm.sh) and
+// www/examples/ with the release command line (scripts/build-examples.sh), which also
+// makes the test's other scenes (the toy as .gltf + .bin and as .ply) in target/e2e/.
 //
 //   node tests/e2e/page.test.mjs        # prints one line per test, then "N passed, N failed"
 //
 // Artifacts (screenshot of the converged page, the downloaded result) go to
 // target/e2e/ (or $E2E_ARTIFACTS). Timings are printed, never asserted.
 import { chromium } from 'playwright-core';
-import { spawn } from 'node:child_process';
+import { execFileSync, spawn } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, readdirSync, statSync } from 'node:fs';
 import { dirname, join, relative } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -20,6 +22,24 @@ if (!existsSync(join(root, 'www', 'pkg', 'localisebot_bg.wasm'))) {
   console.error('www/pkg/ is missing: run scripts/build-wasm.sh first');
   process.exit(1);
 }
+const examplesDir = join(root, 'www', 'examples');
+const cli = join(process.env.CARGO_TARGET_DIR ?? join(root, 'target'), 'release', 'localisebot');
+if (!existsSync(join(examplesDir, 'index.json')) || !existsSync(cli)) {
+  console.error(`www/examples/ or ${cli} is missing: run scripts/build-examples.sh first`);
+  process.exit(1);
+}
+const toyDir = join(examplesDir, 'toy');
+const examples = JSON.parse(readFileSync(join(examplesDir, 'index.json'), 'utf8')).examples;
+
+// A scene folder written by the command line (`localisebot synth ARGS --out DIR`).
+function synthScene(name, args) {
+  const out = join(artifacts, 'scenes', name);
+  execFileSync(cli, ['synth', ...args, '--out', out], { stdio: ['ignore', 'ignore', 'inherit'] });
+  return out;
+}
+const gltfScene = synthScene('toy-gltf', ['--shape', 'toy', '--mesh-format', 'gltf', '--views', '3', '--seed', '5',
+  '--width', '240', '--height', '200']);
+const plyScene = synthScene('toy-ply', ['--shape', 'toy', '--mesh-format', 'ply', '--views', '3', '--seed', '9']);
 
 // ---- server and browser ----------------------------------------------------------
 function startServer() {
@@ -141,8 +161,26 @@ const upload = (page, files) => byId(page, 'file-input').setInputFiles(files.map
 const tests = [];
 const test = (name, fn) => tests.push({ name, fn });
 
-test('example: Load example, Start, converged, every view IoU >= 0.95, canvases drawn, result downloads', async () => {
+// Files dropped on the page with a synthetic drop event (bare names, as dt.files).
+async function drop(page, files) {
+  const dt = await page.evaluateHandle((list) => {
+    const dt = new DataTransfer();
+    for (const f of list) dt.items.add(new File([Uint8Array.from(atob(f.b64), (c) => c.charCodeAt(0))], f.name));
+    return dt;
+  }, files.map((f) => ({ name: f.name, b64: f.buffer.toString('base64') })));
+  await page.dispatchEvent('#drop', 'drop', { dataTransfer: dt });
+}
+
+test('examples: the chooser lists examples/index.json, the toy first; Load, Start, converged, IoU >= 0.95, result downloads', async () => {
   const page = await openPage();
+  const choice = byId(page, 'example-choice');
+  await page.waitForFunction(() => document.querySelector('[data-testid=example-choice]').options.length > 0);
+  const options = await choice.locator('option').evaluateAll((os) => os.map((o) => ({ path: o.value, title: o.text })));
+  assert.deepEqual(options, examples.map(({ path, title }) => ({ path, title })));
+  assert.equal(await choice.inputValue(), 'toy/scene.json', 'the toy is the default');
+  // The Duck is built from ../shared when it is there, and only then.
+  const sharedDuck = existsSync(join(root, '..', 'shared', 'data', 'gltf', 'Duck', 'glTF-Binary', 'Duck.glb'));
+  assert.equal(examples.some((e) => e.id === 'duck'), sharedDuck, 'examples/index.json lists the duck iff ../shared has it');
   await byId(page, 'load-example').click();
   await waitLoaded(page);
   assert.equal(await byId(page, 'view-iou').count(), 4);
@@ -183,10 +221,29 @@ test('example: Load example, Start, converged, every view IoU >= 0.95, canvases 
   await page.context().close();
 });
 
+test('examples: every other listed example loads with the views its scene.json names', async () => {
+  const page = await openPage();
+  await page.waitForFunction(() => document.querySelector('[data-testid=example-choice]').options.length > 0);
+  const others = examples.filter((e) => e.id !== 'toy');
+  if (others.length === 0) console.log('  only the toy was built (no ../shared beside the repository): nothing more to load');
+  for (const e of others) {
+    const scene = JSON.parse(readFileSync(join(examplesDir, e.path), 'utf8'));
+    await byId(page, 'example-choice').selectOption(e.path);
+    await byId(page, 'load-example').click();
+    await page.waitForFunction((names) => [...document.querySelectorAll('.view .name')].map((n) => n.textContent).join() === names,
+      scene.views.map((v) => v.name).join(), { timeout: 60_000 });
+    await waitLoaded(page);
+    await byId(page, 'step').click();
+    await page.waitForFunction(() => /search: [1-9]/.test(document.querySelector('[data-testid=status]').textContent));
+    console.log(`  ${e.id}: ${scene.views.length} views loaded and stepped`);
+  }
+  assert.deepEqual(page.problems, []);
+  await page.context().close();
+});
+
 test('file input: a .gltf + .bin scene (flat file names) converges', async () => {
   const page = await openPage();
-  const files = folderFiles(join(root, 'tests', 'fixtures', 'scenes', 'avocado-3view'));
-  await upload(page, files);
+  await upload(page, folderFiles(gltfScene));
   await waitLoaded(page);
   assert.equal(await byId(page, 'view-iou').count(), 3);
   const t = await fitToConvergence(page);
@@ -198,14 +255,13 @@ test('file input: a .gltf + .bin scene (flat file names) converges', async () =>
 
 test('file input: per-view camera JSON, masks and images of the same names; Step, Pause, Reset', async () => {
   const page = await openPage();
-  const ex = join(root, 'www', 'example');
-  const scene = JSON.parse(readFileSync(join(ex, 'scene.json'), 'utf8'));
-  const files = [{ name: scene.mesh, mimeType: 'model/gltf-binary', buffer: readFileSync(join(ex, scene.mesh)) }];
+  const scene = JSON.parse(readFileSync(join(toyDir, 'scene.json'), 'utf8'));
+  const files = [{ name: scene.mesh, mimeType: 'model/gltf-binary', buffer: readFileSync(join(toyDir, scene.mesh)) }];
   for (const v of scene.views) {
     files.push({ name: `${v.name}.json`, mimeType: 'application/json', buffer: Buffer.from(JSON.stringify(v.camera)) });
     // A mask and an image both called NAME.png: told apart by their content.
-    files.push({ name: `${v.name}.png`, mimeType: 'image/png', buffer: readFileSync(join(ex, v.image)) });
-    files.push({ name: `${v.name}.png`, mimeType: 'image/png', buffer: readFileSync(join(ex, v.mask)) });
+    files.push({ name: `${v.name}.png`, mimeType: 'image/png', buffer: readFileSync(join(toyDir, v.image)) });
+    files.push({ name: `${v.name}.png`, mimeType: 'image/png', buffer: readFileSync(join(toyDir, v.mask)) });
   }
   await upload(page, files);
   await waitLoaded(page);
@@ -229,19 +285,28 @@ test('file input: per-view camera JSON, masks and images of the same names; Step
 
 test('drop: files dropped on the page, masks but no images, load with a notice', async () => {
   const page = await openPage();
-  const files = folderFiles(join(root, 'www', 'example')).filter((f) => !f.rel.startsWith('images'));
-  const dt = await page.evaluateHandle((list) => {
-    const dt = new DataTransfer();
-    for (const f of list) dt.items.add(new File([Uint8Array.from(atob(f.b64), (c) => c.charCodeAt(0))], f.name));
-    return dt;
-  }, files.map((f) => ({ name: f.name, b64: f.buffer.toString('base64') })));
-  await page.dispatchEvent('#drop', 'drop', { dataTransfer: dt });
+  await drop(page, folderFiles(toyDir).filter((f) => !f.rel.startsWith('images')));
   await waitLoaded(page);
   assert.equal(await byId(page, 'view-iou').count(), 4);
   const notice = page.locator('#notice');
   assert.ok(await notice.isVisible());
   assert.match(await notice.textContent(), /view 'view0': image 'images\/view0\.png' not given/);
   assert.ok(await byId(page, 'error').isHidden());
+  assert.deepEqual(page.problems, []);
+  await page.context().close();
+});
+
+test('drop: a .ply mesh with its scene and masks loads and steps', async () => {
+  const page = await openPage();
+  const files = folderFiles(plyScene);
+  assert.ok(files.some((f) => f.name === 'toy.ply'), 'the scene has a .ply mesh');
+  await drop(page, files);
+  await waitLoaded(page);
+  assert.equal(await byId(page, 'view-iou').count(), 3);
+  await byId(page, 'step').click();
+  await page.waitForFunction(() => /search: [1-9]/.test(document.querySelector('[data-testid=status]').textContent));
+  assert.ok(await byId(page, 'error').isHidden());
+  assert.equal(await byId(page, 'file-input').getAttribute('accept').then((a) => a.split(',').includes('.ply')), true);
   assert.deepEqual(page.problems, []);
   await page.context().close();
 });
@@ -254,9 +319,8 @@ test('errors: a malformed .glb, alone or named by a scene, shows a specific erro
   await error.waitFor({ state: 'visible' });
   assert.match(await error.textContent(), /broken\.glb/);
 
-  const ex = join(root, 'www', 'example');
-  const files = folderFiles(ex).filter((f) => !f.name.endsWith('.glb'));
-  const scene = JSON.parse(readFileSync(join(ex, 'scene.json'), 'utf8'));
+  const files = folderFiles(toyDir).filter((f) => !f.name.endsWith('.glb'));
+  const scene = JSON.parse(readFileSync(join(toyDir, 'scene.json'), 'utf8'));
   await upload(page, [...files, { ...broken, name: scene.mesh }]);
   await page.waitForFunction((name) => document.querySelector('[data-testid=error]').textContent.includes(name), scene.mesh);
   assert.match(await error.textContent(), /mesh/);
@@ -264,8 +328,8 @@ test('errors: a malformed .glb, alone or named by a scene, shows a specific erro
   assert.ok(await byId(page, 'start').isDisabled(), 'nothing to start after a failed load');
 
   // A mask of the wrong size names the view and the file.
-  const small = folderFiles(join(root, 'tests', 'fixtures', 'scenes', 'avocado-3view')).find((f) => f.rel.startsWith('masks'));
-  await upload(page, [...files.filter((f) => f.rel !== join('masks', 'view1.png')), { ...small, name: 'view1.png' }, folderFiles(ex).find((f) => f.name.endsWith('.glb'))]);
+  const small = folderFiles(gltfScene).find((f) => f.rel.startsWith('masks'));
+  await upload(page, [...files.filter((f) => f.rel !== join('masks', 'view1.png')), { ...small, name: 'view1.png' }, folderFiles(toyDir).find((f) => f.name.endsWith('.glb'))]);
   await page.waitForFunction(() => document.querySelector('[data-testid=error]').textContent.includes('view1'));
   assert.match(await error.textContent(), /view 'view1': mask .* is 240×200 but the camera is 256×256/);
 
@@ -276,10 +340,53 @@ test('errors: a malformed .glb, alone or named by a scene, shows a specific erro
   await page.context().close();
 });
 
+test('errors: an error thrown inside a fitting slice is shown, and Start works again', async () => {
+  const page = await openPage();
+  // The real glue, with Session.stepFor wrapped to throw on its 4th call (once): the
+  // worker's own catch path must report it.
+  let served = 0;
+  await page.context().route('**/pkg/localisebot.js', async (route) => {
+    const response = await route.fetch();
+    served++;
+    const body = (await response.text()) + `
+const __stepFor = Session.prototype.stepFor;
+let __calls = 0;
+Session.prototype.stepFor = function (...args) {
+  if (++__calls === 4) throw new Error('injected failure in fitting slice ' + __calls);
+  return __stepFor.apply(this, args);
+};
+`;
+    await route.fulfill({ response, body });
+  });
+  await page.reload();
+  await page.waitForFunction(() => document.querySelector('[data-testid=example-choice]').options.length > 0);
+  await byId(page, 'load-example').click();
+  await waitLoaded(page);
+  assert.ok(served >= 1, 'the glue was served through the route');
+  await byId(page, 'start').click();
+  const error = byId(page, 'error');
+  await error.waitFor({ state: 'visible', timeout: 60_000 });
+  assert.equal(await error.textContent(), 'injected failure in fitting slice 4');
+  await page.waitForFunction(() => !document.querySelector('[data-testid=start]').disabled);
+  assert.ok(await byId(page, 'pause').isDisabled(), 'no longer running');
+  assert.ok(await byId(page, 'step').isEnabled() && await byId(page, 'reset').isEnabled());
+  // The worker is alive and the fit goes on from where it stopped.
+  const t = await fitToConvergence(page);
+  for (const v of await ious(page)) assert.ok(v >= 0.95, `view IoU ${v} < 0.95`);
+  assert.ok(await error.isHidden());
+  assert.deepEqual(page.problems, []);
+  console.log(`  after the error: ${t.status}`);
+  await page.context().close();
+});
+
 // ---- run ---------------------------------------------------------------------------------
 let passed = 0;
 let failed = 0;
-for (const { name, fn } of tests) {
+// E2E_ONLY=TEXT runs only the tests whose name contains TEXT (when debugging one).
+const only = process.env.E2E_ONLY;
+const chosen = only ? tests.filter((t) => t.name.includes(only)) : tests;
+if (only) console.log(`E2E_ONLY=${only}: ${chosen.length} of ${tests.length} tests`);
+for (const { name, fn } of chosen) {
   const t0 = Date.now();
   try {
     await fn();

@@ -1,7 +1,7 @@
 //! The command line as a user runs it: real files in a temporary folder, exit
 //! statuses and one-line errors naming the file, the view and the problem.
 
-use crate::fixture;
+use crate::{data, fixture};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -41,7 +41,7 @@ fn assert_error(o: &Output, needles: &[&str]) {
 
 #[test]
 fn info_prints_the_duck_counts_and_bounds() {
-    let o = run(&["info", fixture("gltf/Duck/glTF-Binary/Duck.glb").to_str().unwrap()]);
+    let o = run(&["info", data("gltf/Duck/glTF-Binary/Duck.glb").to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["triangles"], 4212);
@@ -57,7 +57,7 @@ fn info_prints_the_duck_counts_and_bounds() {
 }
 
 fn synth(dir: &Path, mesh: &str, views: &str, extra: &[&str]) {
-    let mesh = fixture(mesh);
+    let mesh = data(mesh);
     let mut args = vec![
         "synth",
         "--mesh",
@@ -206,11 +206,11 @@ fn bad_inputs_give_one_clear_line() {
         &["nope.glb", "cannot read"],
     );
     // Truncated GLB.
-    let duck = std::fs::read(fixture("gltf/Duck/glTF-Binary/Duck.glb")).unwrap();
+    let duck = std::fs::read(data("gltf/Duck/glTF-Binary/Duck.glb")).unwrap();
     std::fs::write(d.join("cut.glb"), &duck[..5000]).unwrap();
     assert_error(&run(&["info", d.join("cut.glb").to_str().unwrap()]), &["cut.glb"]);
     // Draco.
-    let draco = fixture("gltf/2CylinderEngine/glTF-Draco-assimp/2CylinderEngine.gltf");
+    let draco = data("gltf/2CylinderEngine/glTF-Draco-assimp/2CylinderEngine.gltf");
     assert_error(&run(&["info", draco.to_str().unwrap()]), &["Draco"]);
 
     synth(
@@ -424,9 +424,9 @@ fn importers_write_loadable_scenes() {
     let o = run(&[
         "import",
         "nerf",
-        fixture("nerf_lego").to_str().unwrap(),
+        data("multiview/nerf_synthetic_lego").to_str().unwrap(),
         "--mesh",
-        fixture("gltf/Box/glTF/Box.gltf").to_str().unwrap(),
+        data("gltf/Box/glTF/Box.gltf").to_str().unwrap(),
         "--out",
         d.join("lego").to_str().unwrap(),
     ]);
@@ -506,7 +506,7 @@ fn make_impossible(dir: &Path) {
 #[test]
 fn a_failed_fit_is_named_exits_3_when_strict_and_predicts_nothing_in_eval() {
     let d = tmp("verdict");
-    let avocado = crate::shared("data/gltf/Avocado-kaolin/avocado.gltf");
+    let avocado = crate::data("gltf/Avocado-kaolin/avocado.gltf");
     for (i, seed) in ["3", "4"].iter().enumerate() {
         let dir = d.join(format!("scenes/s{i}"));
         let o = run(&[
@@ -571,4 +571,74 @@ fn a_failed_fit_is_named_exits_3_when_strict_and_predicts_nothing_in_eval() {
         row["precision"].as_f64().unwrap() > row["recall"].as_f64().unwrap(),
         "{row}"
     );
+}
+
+#[test]
+fn synth_writes_a_procedural_shape_in_each_mesh_format() {
+    let triangles = localisebot::shapes::toy_plane().triangles.len();
+    for (format, files) in [
+        ("glb", &["toy.glb"][..]),
+        ("gltf", &["toy.gltf", "toy.bin"][..]),
+        ("ply", &["toy.ply"][..]),
+    ] {
+        let d = tmp(&format!("shape-{format}"));
+        let o = run(&[
+            "synth",
+            "--shape",
+            "toy",
+            "--mesh-format",
+            format,
+            "--views",
+            "2",
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "--images",
+            "--grasps",
+            "2",
+            "--out",
+            d.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{format}: {}", stderr(&o));
+        for f in files {
+            assert!(d.join(f).is_file(), "{format}: {f} missing");
+        }
+        let scene: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("scene.json")).unwrap()).unwrap();
+        assert_eq!(scene["mesh"], files[0]);
+        assert_eq!(scene["grasps"].as_array().unwrap().len(), 2, "{format}");
+        assert!(scene["ground_truth_pose"].is_object());
+        let info = run(&["info", d.join(files[0]).to_str().unwrap()]);
+        assert!(info.status.success(), "{format}: {}", stderr(&info));
+        let v: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+        assert_eq!(v["triangles"], triangles, "{format}");
+        // The written mesh reproduces the masks at the true pose.
+        std::fs::write(d.join("gt.json"), scene["ground_truth_pose"].to_string()).unwrap();
+        let o = run(&[
+            "render",
+            d.join("scene.json").to_str().unwrap(),
+            "--pose",
+            d.join("gt.json").to_str().unwrap(),
+            "--out",
+            d.join("ov").to_str().unwrap(),
+        ]);
+        let out = String::from_utf8_lossy(&o.stdout).to_string();
+        assert!(
+            o.status.success() && out.contains("view1: IoU 1.0000"),
+            "{format}: {out}"
+        );
+    }
+    let o = run(&["synth", "--shape", "teapot", "--out", tmp("teapot").to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("teapot"), "{}", stderr(&o));
+    let o = run(&[
+        "synth",
+        "--mesh",
+        "x.glb",
+        "--mesh-format",
+        "ply",
+        "--out",
+        tmp("fmt").to_str().unwrap(),
+    ]);
+    assert_error(&o, &["--mesh-format", "--shape"]);
 }

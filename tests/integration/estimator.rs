@@ -1,7 +1,7 @@
 //! The whole pipeline: search + refinement recover known poses from no initial guess;
 //! the verdict, the scale modes and the loss weights do what they say.
 
-use crate::shared;
+use crate::{data, reference};
 use localisebot::estimator::{Estimator, FitSettings, Phase, ScaleMode};
 use localisebot::metrics::pose_errors;
 use localisebot::synth::{synthesize, SynthSettings};
@@ -9,7 +9,7 @@ use localisebot::verdict::Verdict;
 use localisebot::{io, load_scene, Mask, Mesh, Pose, View};
 
 fn mesh(rel: &str) -> Mesh {
-    let path = shared(&format!("data/{rel}"));
+    let path = data(rel);
     let bytes = std::fs::read(&path).unwrap();
     let dir = path.parent().unwrap().to_path_buf();
     io::load_mesh(&path.to_string_lossy(), &bytes, &|u| std::fs::read(dir.join(u)).ok()).unwrap()
@@ -66,7 +66,7 @@ fn duck_is_found_from_no_initial_pose() {
 #[test]
 fn a_given_initial_pose_skips_the_search_and_is_refined() {
     // The PyTorch3D reference case: its init pose is 22° from the truth.
-    let dir = shared("reference/pytorch3d-case1/scene128");
+    let dir = reference("pytorch3d-case1/scene128");
     let text = std::fs::read_to_string(dir.join("scene.json")).unwrap();
     let scene = load_scene(&dir.join("scene.json").to_string_lossy(), &text, &|p| {
         std::fs::read(p).ok()

@@ -13,7 +13,7 @@ use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 
 fn load(rel: &str) -> Mesh {
-    let path = crate::fixture(rel);
+    let path = crate::data(rel);
     let bytes = std::fs::read(&path).unwrap();
     localisebot::io::load_mesh(&path.to_string_lossy(), &bytes, &|_| None).unwrap()
 }

@@ -1,9 +1,9 @@
 //! The hard rasteriser against naive per-pixel oracles (exact on the snapped
 //! vertices, and in plain f64 on the unsnapped ones), the top-left rule on shared
 //! edges, near-plane clipping against a ray-cast oracle, and PyTorch3D's reference
-//! silhouettes (`tests/fixtures/pytorch3d-case1`).
+//! silhouettes (`../shared/reference/pytorch3d-case1`).
 
-use crate::fixture;
+use crate::{data, reference};
 use glam::{DMat3, DVec2, DVec3};
 use localisebot::raster::hard::{self, BitMask, GUARD_BAND_PX, SUBPIXEL_BITS};
 use localisebot::raster::project::{project_mesh, Projected};
@@ -18,11 +18,11 @@ pub fn load(path: &Path) -> Mesh {
 }
 
 pub fn duck() -> Mesh {
-    load(&fixture("gltf/Duck/glTF-Binary/Duck.glb"))
+    load(&data("gltf/Duck/glTF-Binary/Duck.glb"))
 }
 
 fn blob() -> Mesh {
-    load(&fixture("pytorch3d-case1/mesh.obj"))
+    load(&reference("pytorch3d-case1/mesh.obj"))
 }
 
 /// An axis-aligned cube [-1, 1]³, 12 triangles, mixed windings.
@@ -503,7 +503,7 @@ fn object_behind_the_camera_is_a_view_error() {
 #[test]
 fn pytorch3d_reference_silhouettes() {
     for size in [128, 256] {
-        let dir = fixture(&format!("pytorch3d-case1/scene{size}"));
+        let dir = reference(&format!("pytorch3d-case1/scene{size}"));
         let file = dir.join("scene.json");
         let text = std::fs::read_to_string(&file).unwrap();
         let scene = localisebot::load_scene(&file.to_string_lossy(), &text, &|p| std::fs::read(p).ok()).unwrap();

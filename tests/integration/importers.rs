@@ -1,8 +1,8 @@
-//! Importers: NeRF `transforms_train.json` (the lego fixture, values from
+//! Importers: NeRF `transforms_train.json` (the lego scene of `../shared/data/multiview`, values from
 //! `../shared/data/SOURCES.md`) and BOP (the hand-made `tests/fixtures/bop_mini`, whose
 //! numbers `generate.py` there documents), each loaded end to end as a scene.
 
-use crate::fixture;
+use crate::{data, fixture};
 use glam::{DMat3, DMat4, DVec2, DVec3};
 use localisebot::io::bop::{self, BopOptions, Units};
 use localisebot::io::mask::decode_mask;
@@ -34,7 +34,7 @@ fn file<'a>(imp: &'a Imported, path: &str) -> &'a [u8] {
 
 #[test]
 fn nerf_lego_six_views() {
-    let dir = fixture("nerf_lego");
+    let dir = data("multiview/nerf_synthetic_lego");
     let text = std::fs::read_to_string(dir.join("transforms_train.json")).unwrap();
     let imp = nerf::import(
         "transforms_train.json",
@@ -91,7 +91,7 @@ fn nerf_lego_six_views() {
         );
     }
     // End to end: the scene file loads (with Box as a stand-in mesh).
-    let boxed = std::fs::read(fixture("gltf/Box/glTF-Binary/Box.glb")).unwrap();
+    let boxed = std::fs::read(data("gltf/Box/glTF-Binary/Box.glb")).unwrap();
     let scene = load_imported(&imp, &[("box.glb", boxed)]);
     assert_eq!(scene.views.len(), 6);
     assert_eq!(scene.mesh.triangle_count(), 12);

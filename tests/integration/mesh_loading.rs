@@ -1,7 +1,7 @@
-//! Mesh loading on the Khronos sample files of `tests/fixtures/gltf` (expected values
+//! Mesh loading on the Khronos sample files of `../shared/data/gltf` (expected values
 //! from `../shared/data/SOURCES.md`), malformed input, and one OBJ.
 
-use crate::fixture;
+use crate::data;
 use glam::DVec3;
 use localisebot::io::{gltf, load_mesh, no_files};
 use localisebot::{Error, Mesh};
@@ -11,9 +11,13 @@ fn read(p: &Path) -> Vec<u8> {
     std::fs::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
-/// Loads a fixture mesh, resolving external files beside it.
+/// Loads a mesh of `../shared/data`, resolving external files beside it.
 fn load(rel: &str) -> localisebot::Result<Mesh> {
-    let path = fixture(rel);
+    load_at(data(rel), rel)
+}
+
+/// Loads the mesh file at `path`, named `rel` in errors.
+fn load_at(path: PathBuf, rel: &str) -> localisebot::Result<Mesh> {
     let dir: PathBuf = path.parent().unwrap().to_path_buf();
     load_mesh(rel, &read(&path), &move |uri| std::fs::read(dir.join(uri)).ok())
 }
@@ -52,7 +56,7 @@ fn box_glb_and_gltf_with_external_bin_agree() {
 
 #[test]
 fn box_gltf_without_its_bin_names_it() {
-    let bytes = read(&fixture("gltf/Box/glTF/Box.gltf"));
+    let bytes = read(&data("gltf/Box/glTF/Box.gltf"));
     let e = load_mesh("models/Box.gltf", &bytes, &no_files).unwrap_err();
     assert_eq!(
         e,
@@ -109,7 +113,7 @@ fn avocado_loads_without_its_textures() {
 
 #[test]
 fn truncated_glb_is_an_error() {
-    let bytes = read(&fixture("gltf/Duck/glTF-Binary/Duck.glb"));
+    let bytes = read(&data("gltf/Duck/glTF-Binary/Duck.glb"));
     for cut in [0, 3, 11, 12, 19, 20, 100, 1000, 4000, 50_000, 102_000, bytes.len() - 1] {
         let e = gltf::load("Duck.glb", &bytes[..cut], &no_files);
         match e {
@@ -137,7 +141,7 @@ fn splitmix(state: &mut u64) -> u64 {
 
 #[test]
 fn mutated_box_glb_never_panics() {
-    let bytes = read(&fixture("gltf/Box/glTF-Binary/Box.glb"));
+    let bytes = read(&data("gltf/Box/glTF-Binary/Box.glb"));
     let digits: Vec<usize> = (0..bytes.len()).filter(|&i| bytes[i].is_ascii_digit()).collect();
     let mut state = 42u64;
     let (mut ok, mut err) = (0, 0);
@@ -173,8 +177,8 @@ fn mutated_box_glb_never_panics() {
 
 #[test]
 fn nan_and_garbage_json_are_errors() {
-    let text = String::from_utf8(read(&fixture("gltf/Box/glTF/Box.gltf"))).unwrap();
-    let bin = read(&fixture("gltf/Box/glTF/Box0.bin"));
+    let text = String::from_utf8(read(&data("gltf/Box/glTF/Box.gltf"))).unwrap();
+    let bin = read(&data("gltf/Box/glTF/Box0.bin"));
     let with_bin = move |uri: &str| (uri == "Box0.bin").then(|| bin.clone());
     assert!(gltf::load("Box.gltf", text.as_bytes(), &with_bin).is_ok());
     let nan = text.replacen("-1.0", "NaN", 1);
@@ -198,7 +202,7 @@ fn nan_and_garbage_json_are_errors() {
 
 #[test]
 fn obj_mesh_loads() {
-    let m = load("pytorch3d-case1/mesh.obj").unwrap();
+    let m = load_at(crate::reference("pytorch3d-case1/mesh.obj"), "mesh.obj").unwrap();
     assert_eq!(m.positions.len(), 1026);
     assert_eq!(m.triangle_count(), 2048);
 }

@@ -5,7 +5,7 @@
 //! with a finite-difference Jacobian, the loss along a path to the true pose, and
 //! (printed, not asserted) timings.
 
-use crate::shared;
+use crate::{data, reference};
 use glam::DVec3;
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::loss::target::{Window, WindowMode};
@@ -14,7 +14,7 @@ use localisebot::synth::{blob_mesh, synthesize, SynthSettings};
 use localisebot::{so3, Mask, Mesh, Pose, Scene, View};
 
 fn load_case(size: u32) -> (Scene, Pose) {
-    let dir = shared(&format!("reference/pytorch3d-case1/scene{size}"));
+    let dir = reference(&format!("pytorch3d-case1/scene{size}"));
     let text = std::fs::read_to_string(dir.join("scene.json")).unwrap();
     let d2 = dir.clone();
     let resolver = move |rel: &str| std::fs::read(d2.join(rel)).ok();
@@ -23,19 +23,17 @@ fn load_case(size: u32) -> (Scene, Pose) {
     (scene, Pose::from_json_str(&init, "init_pose.json").unwrap())
 }
 
-fn reference() -> serde_json::Value {
-    let path = shared("reference/pytorch3d-case1/reference.json");
+fn reference_json() -> serde_json::Value {
+    let path = reference("pytorch3d-case1/reference.json");
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 fn read_f32(size: u32, view: usize) -> Vec<f64> {
-    std::fs::read(shared(&format!(
-        "reference/pytorch3d-case1/soft_init_{size}_view{view}.f32"
-    )))
-    .unwrap()
-    .chunks_exact(4)
-    .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
-    .collect()
+    std::fs::read(reference(&format!("pytorch3d-case1/soft_init_{size}_view{view}.f32")))
+        .unwrap()
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
+        .collect()
 }
 
 /// The pose moved by θ = [ω, t, ls] (right rotation perturbation, log-scale).
@@ -83,7 +81,7 @@ fn fd_gradient(o: &mut Objective, mesh: &Mesh, pose: &Pose, h: f64) -> Vec<f64> 
 
 #[test]
 fn objective_matches_the_pytorch3d_reference() {
-    let refj = reference();
+    let refj = reference_json();
     for size in [128u32, 256] {
         let r = &refj["per_res"][size.to_string()];
         let (scene, init) = load_case(size);
@@ -352,7 +350,7 @@ fn objective_falls_along_the_path_to_the_true_pose() {
 fn objective_timings() {
     let duck = localisebot::io::load_mesh(
         "Duck.glb",
-        &std::fs::read(shared("data/gltf/Duck/glTF-Binary/Duck.glb")).unwrap(),
+        &std::fs::read(data("gltf/Duck/glTF-Binary/Duck.glb")).unwrap(),
         &localisebot::io::no_files,
     )
     .unwrap();

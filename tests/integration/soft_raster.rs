@@ -2,7 +2,6 @@
 //! stage against central finite differences. (The objective built on it — the
 //! PyTorch3D reference, loss gradients, the Gauss–Newton model — is in `objective.rs`.)
 
-use crate::fixture;
 use glam::{DVec2, DVec3};
 use localisebot::loss::contour::ContourTarget;
 use localisebot::loss::iou::{soft_iou_loss, soft_iou_loss_grad};
@@ -12,7 +11,7 @@ use localisebot::{so3, Camera, Mask, Mesh, Pose, Scene};
 // ---------------------------------------------------------------- helpers
 
 fn load_case(size: u32) -> (Scene, Pose) {
-    let dir = fixture(&format!("pytorch3d-case1/scene{size}"));
+    let dir = crate::reference(&format!("pytorch3d-case1/scene{size}"));
     let text = std::fs::read_to_string(dir.join("scene.json")).unwrap();
     let d2 = dir.clone();
     let resolver = move |rel: &str| std::fs::read(d2.join(rel)).ok();

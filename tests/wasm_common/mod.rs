@@ -1,104 +1,127 @@
 //! The WebAssembly test suite, shared by `tests/wasm.rs` (headless Chromium) and
-//! `tests/wasm_node.rs` (Node): the core and the binding on the native tests'
-//! fixtures — mesh loading, hard rendering against masks the native rasteriser made,
-//! file matching, errors reaching JavaScript as `Error` objects, and a fit compared
-//! with the native result that `tests/wasm_parity.rs` records and checks natively.
+//! `tests/wasm_node.rs` (Node). A wasm test cannot read files, so its data is made here
+//! from the project's procedural toy aeroplane (`localisebot::shapes`): the page's
+//! example scene by `synth` (4 views with images and grasps, written as the page's
+//! files: `.glb`, PNGs, `scene.json`), and the committed parity scene
+//! `tests/fixtures/scenes/toy-3view` (project-made; its `toy.glb` written here). It
+//! checks mesh loading (`.glb`, `.gltf` + `.bin`, `.ply`), hard renders against the
+//! masks the native rasteriser drew, file matching, errors reaching JavaScript as
+//! `Error` objects, and a fit compared with the native result that
+//! `tests/wasm_parity.rs` records and checks natively. Real glTF files of `../shared`
+//! are parsed in wasm by `tests/wasm_shared.rs`.
 
 use glam::DMat3;
-use localisebot::io::{load_mesh, no_files};
+use localisebot::grasp::antipodal_grasps;
+use localisebot::io::png::{encode_gray, encode_rgba};
+use localisebot::io::{gltf_write, load_mesh, no_files, ply};
 use localisebot::metrics::hard_iou;
 use localisebot::pose::mat3_from_rows;
 use localisebot::raster::hard;
-use localisebot::wasm::{check_mesh, FileRole, FileSet, Session, SessionBuilder};
-use localisebot::Mesh;
+use localisebot::shapes::toy_plane;
+use localisebot::synth::{synthesize, SynthSettings};
+use localisebot::wasm::{check_mesh, mesh_files, scene_files, FileRole, FileSet, Session, SessionBuilder};
+use localisebot::{CameraJson, Mesh, PoseJson, SceneJson, ViewJson};
 use wasm_bindgen::{JsCast, JsError, JsValue};
 use wasm_bindgen_test::wasm_bindgen_test;
 
-const DUCK_GLB: &[u8] = include_bytes!("../fixtures/gltf/Duck/glTF-Binary/Duck.glb");
-const DUCK_GLTF: &[u8] = include_bytes!("../fixtures/gltf/Duck/glTF-Embedded/Duck.gltf");
-const BOX_GLB: &[u8] = include_bytes!("../fixtures/gltf/Box/glTF-Binary/Box.glb");
-const BOX_GLTF: &[u8] = include_bytes!("../fixtures/gltf/Box/glTF/Box.gltf");
-const BOX_BIN: &[u8] = include_bytes!("../fixtures/gltf/Box/glTF/Box0.bin");
+/// Files as (path, bytes).
+type Files = Vec<(String, Vec<u8>)>;
 
-/// The web page's example (Duck, 4 views, images), as the page fetches it.
-const EXAMPLE: [(&str, &[u8]); 10] = [
-    ("example/scene.json", include_bytes!("../../www/example/scene.json")),
-    ("example/Duck.glb", include_bytes!("../../www/example/Duck.glb")),
-    (
-        "example/masks/view0.png",
-        include_bytes!("../../www/example/masks/view0.png"),
-    ),
-    (
-        "example/masks/view1.png",
-        include_bytes!("../../www/example/masks/view1.png"),
-    ),
-    (
-        "example/masks/view2.png",
-        include_bytes!("../../www/example/masks/view2.png"),
-    ),
-    (
-        "example/masks/view3.png",
-        include_bytes!("../../www/example/masks/view3.png"),
-    ),
-    (
-        "example/images/view0.png",
-        include_bytes!("../../www/example/images/view0.png"),
-    ),
-    (
-        "example/images/view1.png",
-        include_bytes!("../../www/example/images/view1.png"),
-    ),
-    (
-        "example/images/view2.png",
-        include_bytes!("../../www/example/images/view2.png"),
-    ),
-    (
-        "example/images/view3.png",
-        include_bytes!("../../www/example/images/view3.png"),
-    ),
-];
+/// The page's toy example as `scripts/build-examples.sh` makes it (`synth --shape toy
+/// --views 4 --images --grasps`), under `example/`: `scene.json`, `toy.glb`,
+/// `masks/view0..3.png`, `images/view0..3.png`, in that order.
+fn toy_example() -> Files {
+    let mesh = toy_plane();
+    let settings = SynthSettings {
+        views: 4,
+        seed: 7,
+        images: true,
+        ..Default::default()
+    };
+    let s = synthesize(&mesh, &settings, None).unwrap();
+    let grasps = antipodal_grasps(&mesh, mesh.diameter(), 6, 7);
+    assert!(!grasps.is_empty(), "the toy has antipodal grasps");
+    let mut masks = Vec::new();
+    let mut images = Vec::new();
+    let mut views = Vec::new();
+    for (i, v) in s.views().iter().enumerate() {
+        let grey: Vec<u8> = v.mask().data.iter().map(|&o| o * 255).collect();
+        masks.push((
+            format!("example/masks/{}.png", v.name()),
+            encode_gray(v.mask().width, v.mask().height, &grey),
+        ));
+        images.push((format!("example/images/{}.png", v.name()), encode_rgba(&s.images[i])));
+        views.push(ViewJson {
+            name: v.name().to_string(),
+            image: Some(format!("images/{}.png", v.name())),
+            mask: format!("masks/{}.png", v.name()),
+            camera: CameraJson::from_camera(v.camera()),
+        });
+    }
+    let scene = SceneJson {
+        version: 1,
+        mesh: "toy.glb".into(),
+        views,
+        initial_pose: None,
+        ground_truth_pose: Some(PoseJson::from_pose(&s.pose)),
+        grasps: grasps.iter().map(|g| g.to_json()).collect(),
+    };
+    let mut files = vec![
+        ("example/scene.json".to_string(), scene.to_json_string().into_bytes()),
+        (
+            "example/toy.glb".to_string(),
+            gltf_write::glb(&mesh, "toy.glb").unwrap(),
+        ),
+    ];
+    files.extend(masks);
+    files.extend(images);
+    files
+}
 
-/// A 3-view Avocado scene (`.gltf` + `.bin`), and the native fit's result on it.
-const AVOCADO: [(&str, &[u8]); 6] = [
-    (
-        "scene.json",
-        include_bytes!("../fixtures/scenes/avocado-3view/scene.json"),
-    ),
-    (
-        "avocado.gltf",
-        include_bytes!("../fixtures/scenes/avocado-3view/avocado.gltf"),
-    ),
-    (
-        "avocado.bin",
-        include_bytes!("../fixtures/scenes/avocado-3view/avocado.bin"),
-    ),
-    (
-        "masks/view0.png",
-        include_bytes!("../fixtures/scenes/avocado-3view/masks/view0.png"),
-    ),
-    (
-        "masks/view1.png",
-        include_bytes!("../fixtures/scenes/avocado-3view/masks/view1.png"),
-    ),
-    (
-        "masks/view2.png",
-        include_bytes!("../fixtures/scenes/avocado-3view/masks/view2.png"),
-    ),
-];
-const AVOCADO_NATIVE: &str = include_str!("../fixtures/scenes/avocado-3view/native_fit.json");
+/// The parity scene (3 views, 240×200, made natively by `tests/wasm_parity.rs`) with
+/// its `toy.glb`, and the native fit's result on it.
+fn parity_scene() -> Files {
+    vec![
+        (
+            "scene.json".into(),
+            include_bytes!("../fixtures/scenes/toy-3view/scene.json").to_vec(),
+        ),
+        ("toy.glb".into(), gltf_write::glb(&toy_plane(), "toy.glb").unwrap()),
+        (
+            "masks/view0.png".into(),
+            include_bytes!("../fixtures/scenes/toy-3view/masks/view0.png").to_vec(),
+        ),
+        (
+            "masks/view1.png".into(),
+            include_bytes!("../fixtures/scenes/toy-3view/masks/view1.png").to_vec(),
+        ),
+        (
+            "masks/view2.png".into(),
+            include_bytes!("../fixtures/scenes/toy-3view/masks/view2.png").to_vec(),
+        ),
+    ]
+}
+const PARITY_NATIVE: &str = include_str!("../fixtures/scenes/toy-3view/native_fit.json");
 
-fn file_set(files: &[(&str, &[u8])], flat: bool) -> FileSet {
+fn file_set(files: &[(String, Vec<u8>)], flat: bool) -> FileSet {
     let mut set = FileSet::new();
     for (path, bytes) in files {
         let name = if flat { path.rsplit('/').next().unwrap() } else { path };
-        set.add(name, bytes.to_vec());
+        set.add(name, bytes.clone());
     }
     set
 }
 
-fn text(files: &[(&str, &[u8])], path: &str) -> String {
-    let bytes = files.iter().find(|(p, _)| *p == path).unwrap().1;
-    String::from_utf8(bytes.to_vec()).unwrap()
+fn bytes<'a>(files: &'a [(String, Vec<u8>)], path: &str) -> &'a [u8] {
+    &files
+        .iter()
+        .find(|(p, _)| p == path)
+        .unwrap_or_else(|| panic!("{path}"))
+        .1
+}
+
+fn text(files: &[(String, Vec<u8>)], path: &str) -> String {
+    String::from_utf8(bytes(files, path).to_vec()).unwrap()
 }
 
 /// The message of a `JsError` as JavaScript sees it: it must be an `Error` object.
@@ -121,65 +144,79 @@ fn same_mesh(a: &Mesh, b: &Mesh, tol: f64) {
 }
 
 #[wasm_bindgen_test]
-fn meshes_load_alike_from_glb_gltf_and_buffers() {
-    let glb = load_mesh("Duck.glb", DUCK_GLB, &no_files).unwrap();
-    let gltf = load_mesh("Duck.gltf", DUCK_GLTF, &no_files).unwrap();
-    assert_eq!(glb.triangles.len(), 4212);
-    same_mesh(&glb, &gltf, 1e-6);
-
-    let box_glb = load_mesh("Box.glb", BOX_GLB, &no_files).unwrap();
-    let bin = |uri: &str| (uri == "Box0.bin").then(|| BOX_BIN.to_vec());
-    let box_gltf = load_mesh("Box.gltf", BOX_GLTF, &bin).unwrap();
-    assert_eq!(box_gltf.triangles.len(), 12);
-    same_mesh(&box_glb, &box_gltf, 1e-12);
-    // Through the binding: the .bin found by name in a FileSet.
+fn meshes_load_alike_from_glb_gltf_with_its_bin_and_ply() {
+    let toy = toy_plane();
+    let glb = gltf_write::glb(&toy, "toy.glb").unwrap();
+    let (gltf, bin) = gltf_write::gltf_and_bin(&toy, "toy.gltf", "toy.bin").unwrap();
+    let from_glb = load_mesh("toy.glb", &glb, &no_files).unwrap();
+    let resolve = |uri: &str| (uri == "toy.bin").then(|| bin.clone());
+    let from_gltf = load_mesh("toy.gltf", gltf.as_bytes(), &resolve).unwrap();
+    let from_ply = load_mesh("toy.ply", &ply::write_ascii(&toy, "toy"), &no_files).unwrap();
+    assert_eq!(from_glb.triangles.len(), toy.triangles.len());
+    same_mesh(&from_glb, &from_gltf, 0.0);
+    same_mesh(&toy, &from_glb, 1e-7);
+    same_mesh(&toy, &from_ply, 1e-12);
+    // Through the binding: the .bin found by name in a FileSet; its absence named.
     let mut extra = FileSet::new();
-    extra.add("Box0.bin", BOX_BIN.to_vec());
-    assert_eq!(check_mesh("models/Box.gltf", BOX_GLTF, &extra).unwrap(), 12);
+    extra.add("toy.bin", bin.clone());
+    assert_eq!(
+        check_mesh("models/toy.gltf", gltf.as_bytes(), &extra).unwrap(),
+        toy.triangles.len()
+    );
+    assert_eq!(mesh_files("models/toy.gltf", gltf.as_bytes()), ["models/toy.bin"]);
+    let msg = js_message(check_mesh("models/toy.gltf", gltf.as_bytes(), &FileSet::new()).unwrap_err());
+    assert!(msg.contains("toy.bin"), "{msg}");
 }
 
 #[wasm_bindgen_test]
 fn hard_renders_at_the_true_pose_reproduce_the_native_masks() {
-    let scene = file_set(&EXAMPLE, false)
-        .load_scene("example/scene.json", &text(&EXAMPLE, "example/scene.json"))
+    let files = parity_scene();
+    let scene = file_set(&files, false)
+        .load_scene("scene.json", &text(&files, "scene.json"))
         .unwrap()
         .0;
     let truth = scene.ground_truth_pose.unwrap();
-    assert_eq!(scene.views.len(), 4);
+    assert_eq!(scene.views.len(), 3);
     for v in &scene.views {
-        assert!(v.image.is_some(), "view {} has its image", v.name);
-        let m = hard::render(&scene.mesh, &truth, &v.camera);
-        let iou = hard_iou(&m, &v.mask);
+        let m = hard::render(&scene.mesh, &truth, v.camera());
+        let iou = hard_iou(&m, &v.mask());
         // The masks were rendered natively by the same rasteriser (integer inside tests).
         assert!(
             iou >= 0.999,
             "view {}: IoU {iou} between the wasm render and the native mask",
-            v.name
+            v.name()
         );
-        assert!(v.mask.area() > 1000);
+        assert!(v.mask().area() > 500);
     }
 }
 
 #[wasm_bindgen_test]
 fn files_are_matched_by_path_then_by_name_then_by_content() {
-    let set = file_set(&EXAMPLE, true); // bare names: images/view0.png and masks/view0.png are both view0.png
+    let ex = toy_example();
+    let set = file_set(&ex, true); // bare names: images/view0.png and masks/view0.png are both view0.png
     let mask = set.find("masks/view0.png", FileRole::Mask).unwrap().unwrap();
     let image = set.find("images/view0.png", FileRole::Image).unwrap().unwrap();
-    assert!(mask == EXAMPLE[2].1, "masks/view0.png is the mask");
-    assert!(image == EXAMPLE[6].1, "images/view0.png is the image");
+    assert!(
+        mask == bytes(&ex, "example/masks/view0.png"),
+        "masks/view0.png is the mask"
+    );
+    assert!(
+        image == bytes(&ex, "example/images/view0.png"),
+        "images/view0.png is the image"
+    );
     let err = set.find("view0.png", FileRole::Other).unwrap_err();
     assert!(err.contains("ambiguous") && err.contains("view0.png"), "{err}");
-    let glb = |p: &str| set.find(p, FileRole::Other).unwrap() == Some(EXAMPLE[1].1);
+    let glb = |p: &str| set.find(p, FileRole::Other).unwrap() == Some(bytes(&ex, "example/toy.glb"));
     assert!(
-        glb("models/Duck.glb") && glb("duck.GLB"),
+        glb("models/toy.glb") && glb("Toy.GLB"),
         "found by name, then by name in any case"
     );
     assert!(set.find("nothing.png", FileRole::Mask).unwrap().is_none());
     // With folder paths, the path decides, whatever the role.
-    let deep = file_set(&EXAMPLE, false);
+    let deep = file_set(&ex, false);
     let by_path = deep.find("./masks/../images/view2.png", FileRole::Mask).unwrap();
-    assert!(by_path == Some(EXAMPLE[8].1), "found by path");
-    assert!(deep.find("masks/view2.png", FileRole::Image).unwrap() == Some(EXAMPLE[4].1));
+    assert!(by_path == Some(bytes(&ex, "example/images/view2.png")), "found by path");
+    assert!(deep.find("masks/view2.png", FileRole::Image).unwrap() == Some(bytes(&ex, "example/masks/view2.png")));
     assert!(
         deep.find("view2.png", FileRole::Other).is_err(),
         "two folders hold a view2.png"
@@ -189,10 +226,10 @@ fn files_are_matched_by_path_then_by_name_then_by_content() {
         "not from another folder"
     );
     // A whole scene from flat names loads, masks and images in their places.
-    let mut session = Session::from_scene("scene.json", &text(&EXAMPLE, "example/scene.json"), &set).unwrap();
+    let mut session = Session::from_scene("scene.json", &text(&ex, "example/scene.json"), &set).unwrap();
     let views = session.estimator().views();
     assert_eq!(views.len(), 4);
-    assert!(views.iter().all(|v| v.image.is_some() && v.mask.area() > 1000));
+    assert!(views.iter().all(|v| v.image().is_some() && v.mask().area() > 500));
     assert!(session.warnings().is_empty());
     // The example's grasps are drawn (cyan) over the views at the current pose.
     let cyan = (0..4).any(|i| {
@@ -205,14 +242,10 @@ fn files_are_matched_by_path_then_by_name_then_by_content() {
     });
     assert!(cyan, "grasp rectangles appear on the views");
     // Images are for display: without them the scene loads, with a warning per view.
-    let masks_only: Vec<_> = EXAMPLE
-        .iter()
-        .copied()
-        .filter(|(p, _)| !p.contains("images/"))
-        .collect();
+    let masks_only: Files = ex.iter().filter(|(p, _)| !p.contains("images/")).cloned().collect();
     let session = Session::from_scene(
         "scene.json",
-        &text(&EXAMPLE, "example/scene.json"),
+        &text(&ex, "example/scene.json"),
         &file_set(&masks_only, true),
     )
     .unwrap();
@@ -220,7 +253,7 @@ fn files_are_matched_by_path_then_by_name_then_by_content() {
         .estimator()
         .views()
         .iter()
-        .all(|v| v.image.is_none() && v.mask.area() > 1000));
+        .all(|v| v.image().is_none() && v.mask().area() > 500));
     let warnings = session.warnings();
     assert_eq!(warnings.len(), 4);
     assert!(
@@ -230,21 +263,71 @@ fn files_are_matched_by_path_then_by_name_then_by_content() {
 }
 
 #[wasm_bindgen_test]
+fn dropped_files_make_a_session_whatever_they_are() {
+    let ex = toy_example();
+    // The example folder as dropped: the scene.json is found among the files.
+    let session = Session::from_files(&file_set(&ex, false)).unwrap();
+    assert_eq!(session.view_count(), 4);
+    // What the page's example fetcher asks for, from the scene's own text.
+    let wanted = scene_files("example/scene.json", &text(&ex, "example/scene.json")).unwrap();
+    let mut names: Vec<&str> = ex.iter().map(|(p, _)| p.as_str()).skip(1).collect();
+    assert_eq!(wanted.len(), names.len());
+    names.retain(|n| !wanted.iter().any(|w| w == n));
+    assert!(names.is_empty(), "not asked for: {names:?}");
+    // One camera JSON per view, with a mask and an image both named viewN.png.
+    let scene: serde_json::Value = serde_json::from_str(&text(&ex, "example/scene.json")).unwrap();
+    let mut set = FileSet::new();
+    set.add("toy.glb", bytes(&ex, "example/toy.glb").to_vec());
+    for v in scene["views"].as_array().unwrap() {
+        let name = v["name"].as_str().unwrap();
+        set.add(&format!("{name}.json"), v["camera"].to_string().into_bytes());
+        set.add(
+            &format!("{name}.png"),
+            bytes(&ex, &format!("example/images/{name}.png")).to_vec(),
+        );
+        set.add(
+            &format!("{name}.png"),
+            bytes(&ex, &format!("example/masks/{name}.png")).to_vec(),
+        );
+    }
+    let session = Session::from_files(&set).unwrap();
+    let from_folder = Session::from_files(&file_set(&ex, false)).unwrap();
+    for (a, b) in session.estimator().views().iter().zip(from_folder.estimator().views()) {
+        assert!(
+            a.mask == b.mask && a.image == b.image,
+            "view {}: mask and image told apart",
+            a.name
+        );
+    }
+    // A mesh alone: checked, then reported as lacking a scene.
+    let mut mesh_only = FileSet::new();
+    mesh_only.add("toy.glb", bytes(&ex, "example/toy.glb").to_vec());
+    let msg = js_message(Session::from_files(&mesh_only).err().unwrap());
+    assert!(
+        msg.starts_with("toy.glb: a valid mesh (") && msg.contains("no scene"),
+        "{msg}"
+    );
+    let msg = js_message(Session::from_files(&FileSet::new()).err().unwrap());
+    assert_eq!(msg, "no files were given");
+}
+
+#[wasm_bindgen_test]
 fn errors_reach_javascript_as_error_objects_with_specific_messages() {
-    let scene = text(&EXAMPLE, "example/scene.json");
-    let mut broken = file_set(&EXAMPLE, false);
-    broken.add("example/Duck.glb", b"glTF\x02\x00\x00\x00garbage".to_vec());
+    let ex = toy_example();
+    let scene = text(&ex, "example/scene.json");
+    let mut broken = file_set(&ex, false);
+    broken.add("example/toy.glb", b"glTF\x02\x00\x00\x00garbage".to_vec());
     let msg = js_message(
         Session::from_scene("example/scene.json", &scene, &broken)
             .err()
             .unwrap(),
     );
-    assert!(msg.contains("mesh 'example/Duck.glb'"), "{msg}");
+    assert!(msg.contains("mesh 'example/toy.glb'"), "{msg}");
 
-    let without_mask: Vec<_> = EXAMPLE
+    let without_mask: Files = ex
         .iter()
-        .copied()
         .filter(|(p, _)| !p.ends_with("masks/view2.png"))
+        .cloned()
         .collect();
     let msg = js_message(
         Session::from_scene("example/scene.json", &scene, &file_set(&without_mask, false))
@@ -265,8 +348,13 @@ fn errors_reach_javascript_as_error_objects_with_specific_messages() {
 
     let mut b = SessionBuilder::new();
     let msg = js_message(
-        b.add_view("left", JsValue::from_str("{\"fx\": 1}"), EXAMPLE[2].1, None)
-            .unwrap_err(),
+        b.add_view(
+            "left",
+            JsValue::from_str("{\"fx\": 1}"),
+            bytes(&ex, "example/masks/view0.png"),
+            None,
+        )
+        .unwrap_err(),
     );
     assert!(msg.contains("view 'left'") && msg.contains("camera"), "{msg}");
     let msg = js_message(SessionBuilder::new().build().err().unwrap());
@@ -275,11 +363,12 @@ fn errors_reach_javascript_as_error_objects_with_specific_messages() {
 
 #[wasm_bindgen_test]
 fn a_session_built_view_by_view_matches_the_scene() {
-    let scene_text = text(&EXAMPLE, "example/scene.json");
+    let ex = toy_example();
+    let scene_text = text(&ex, "example/scene.json");
     let json: serde_json::Value = serde_json::from_str(&scene_text).unwrap();
     let mut b = SessionBuilder::new();
-    b.mesh("Duck.glb", EXAMPLE[1].1, None).unwrap();
-    let from_scene = file_set(&EXAMPLE, false)
+    b.mesh("toy.glb", bytes(&ex, "example/toy.glb"), None).unwrap();
+    let from_scene = file_set(&ex, false)
         .load_scene("example/scene.json", &scene_text)
         .unwrap()
         .0;
@@ -287,8 +376,9 @@ fn a_session_built_view_by_view_matches_the_scene() {
         let camera = JsValue::from_str(&v["camera"].to_string());
         let name = v["name"].as_str().unwrap();
         if i % 2 == 0 {
-            b.add_view(name, camera, EXAMPLE[2 + i].1, Some(EXAMPLE[6 + i].1.to_vec()))
-                .unwrap();
+            let mask = bytes(&ex, &format!("example/masks/{name}.png"));
+            let image = bytes(&ex, &format!("example/images/{name}.png")).to_vec();
+            b.add_view(name, camera, mask, Some(image)).unwrap();
         } else {
             // RGBA pixels, as from ImageData: the mask in alpha.
             let m = &from_scene.views[i].mask;
@@ -301,8 +391,8 @@ fn a_session_built_view_by_view_matches_the_scene() {
     let mut session = b.build().unwrap();
     assert_eq!(session.view_count(), 4);
     for (v, w) in session.estimator().views().iter().zip(&from_scene.views) {
-        assert!(v.mask == w.mask, "view {}: the same mask", v.name);
-        assert_eq!(v.camera, w.camera);
+        assert!(v.mask() == w.mask, "view {}: the same mask", v.name());
+        assert_eq!(v.camera(), w.camera);
     }
     let p = session.step(3).unwrap();
     assert_eq!(js_get(&p, "phase").as_string().unwrap(), "search");
@@ -337,8 +427,9 @@ fn vec3(v: &serde_json::Value) -> glam::DVec3 {
 /// up to the fit's own precision (seen: 0.17°, 0.24% of the diameter, 0.8% in scale).
 #[wasm_bindgen_test]
 fn a_fit_converges_to_the_native_result() {
-    let set = file_set(&AVOCADO, true);
-    let mut session = Session::from_scene("scene.json", &text(&AVOCADO, "scene.json"), &set).unwrap();
+    let files = parity_scene();
+    let set = file_set(&files, true);
+    let mut session = Session::from_scene("scene.json", &text(&files, "scene.json"), &set).unwrap();
     let first = session.step(1).unwrap();
     assert_eq!(js_get(&first, "phase").as_string().unwrap(), "search");
     let mut steps = 0;
@@ -354,7 +445,7 @@ fn a_fit_converges_to_the_native_result() {
     assert!(losses.len() > 10 && losses.last().unwrap() < &losses[0]);
 
     let wasm: serde_json::Value = serde_json::from_str(&session.result_json().unwrap()).unwrap();
-    let native: serde_json::Value = serde_json::from_str(AVOCADO_NATIVE).unwrap();
+    let native: serde_json::Value = serde_json::from_str(PARITY_NATIVE).unwrap();
     let rot = |r: &serde_json::Value| mat3_from_rows(serde_json::from_value(r["pose"]["rotation"].clone()).unwrap());
     let diameter = native["errors"]["diameter"].as_f64().unwrap();
     let da = angle_deg(rot(&wasm), rot(&native));

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Builds the web page's examples into www/examples/ (ignored by git) with the release
+# command line, and www/examples/index.json listing them ({"examples": [{id, title,
+# path}]}, path relative to index.json), which "Load example" offers:
+#
+#   toy   the project's procedural toy aeroplane (src/shapes.rs), 4 views: always;
+#   duck  the Khronos Duck, read where it is in ../shared/data (the shared third-party
+#         data beside the repository), 4 views: when ../shared is there.
+#
+# Adding an example is one `example ID "TITLE" COMMAND...` line below: COMMAND is run
+# with `--out www/examples/ID` appended and must write ID/scene.json and the files it
+# names (e.g. `$B import bop ...` for a real photograph).
+#
+#   scripts/build-examples.sh [OUT_DIR]      # default www/examples
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH="$HOME/.cargo/bin:$PATH"
+OUT=${1:-www/examples}
+SHARED=../shared/data
+cargo build --locked --release --bin localisebot
+B=${CARGO_TARGET_DIR:-target}/release/localisebot
+rm -rf "$OUT"
+mkdir -p "$OUT"
+ENTRIES=()
+
+# example ID TITLE COMMAND...: runs COMMAND --out OUT/ID and lists the example.
+example() {
+  local id=$1 title=$2
+  shift 2
+  "$@" --out "$OUT/$id"
+  [ -f "$OUT/$id/scene.json" ] || { echo "example '$id': $OUT/$id/scene.json was not written" >&2; exit 1; }
+  ENTRIES+=("{\"id\": \"$id\", \"title\": \"$title\", \"path\": \"$id/scene.json\"}")
+}
+
+example toy "Toy aeroplane (procedural, 4 views)" \
+  "$B" synth --shape toy --views 4 --seed 7 --images --grasps 6
+if [ -f "$SHARED/gltf/Duck/glTF-Binary/Duck.glb" ]; then
+  example duck "Duck (Khronos glTF sample, 4 views)" \
+    "$B" synth --mesh "$SHARED/gltf/Duck/glTF-Binary/Duck.glb" --views 4 --seed 7 --images --grasps 6
+else
+  echo "note: $SHARED/gltf/Duck/glTF-Binary/Duck.glb not found (../shared must sit beside the" \
+    "repository): the Duck example is left out" >&2
+fi
+
+{
+  echo '{"examples": ['
+  for i in "${!ENTRIES[@]}"; do
+    sep=","; [ "$i" -eq $((${#ENTRIES[@]} - 1)) ] && sep=""
+    echo "  ${ENTRIES[$i]}$sep"
+  done
+  echo ']}'
+} > "$OUT/index.json"
+echo "built ${#ENTRIES[@]} example(s) in $OUT: $(cd "$OUT" && ls -d -- */ | tr -d / | tr '\n' ' ')"

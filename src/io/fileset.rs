@@ -1,0 +1,916 @@
+//! Files as a user hands them over — dropped or chosen in a browser, paths
+//! folder-relative or bare names, and bytes — and the policy that makes one scene of
+//! them. [`FileSet::plan`] decides which file is what:
+//!
+//! - a `scene.json` (a JSON object with a `mesh` string and a `views` array) is the
+//!   scene; the files it names are found by path relative to it, then by path suffix,
+//!   then ignoring case ([`FileSet::find`]); a mesh dropped under another name is used
+//!   when it is the only one;
+//! - else one camera JSON per view (a camera, or a scene view entry with `camera` and
+//!   optionally `name`, `mask`, `image`): `NAME.json` is the view `NAME`, its mask
+//!   `masks/NAME.png`, `NAME_mask.png`, `mask_NAME.png` or a lone `NAME.png`, its image
+//!   `images/NAME.png`, `rgb/NAME.png` or `NAME_image.png`; two files both called
+//!   `NAME.png` are told apart by their pixels (a mask is only black and white);
+//! - a mesh alone (`.glb`, `.gltf` with its `.bin`, `.obj`, `.ply`) is checked and
+//!   reported as lacking a scene.
+//!
+//! Everything here is plain Rust over bytes: the wasm binding (`wasm::FileSet`) only
+//! wraps it, and the tests below run natively.
+
+use crate::error::{Error, Result};
+use crate::io::mask::decode_image;
+use crate::io::scene::{scene_from_parts, Scene, SceneJson};
+use crate::io::{join, load_mesh, parent_dir};
+use crate::mesh::Mesh;
+use serde_json::{json, Value};
+use std::cmp::Ordering;
+
+/// What a file is wanted for; breaks ties between files of the same name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FileRole {
+    /// A mask: among same-named files, the one whose pixels are only black and white.
+    Mask,
+    /// An image: among same-named files, the one that is not black and white.
+    Image,
+    /// Anything else (a mesh, a buffer): same-named files are an error.
+    Other,
+}
+
+/// A set of named files (paths as given: folder-relative, or bare names).
+#[derive(Debug, Default, Clone)]
+pub struct FileSet {
+    files: Vec<(String, Vec<u8>)>,
+}
+
+/// What [`FileSet::plan`] found the files to be.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Plan {
+    /// A scene: its file's path and JSON text (made up as `cameras.json` from
+    /// per-view camera files), to load with [`FileSet::load_scene`].
+    Scene {
+        /// The scene file's path (files it names are relative to its folder).
+        file: String,
+        /// Its JSON text.
+        text: String,
+    },
+    /// A mesh and no scene.
+    MeshOnly {
+        /// The mesh file's path.
+        file: String,
+    },
+}
+
+/// The mesh file types [`load_mesh`] reads, by extension.
+pub const MESH_EXTENSIONS: [&str; 4] = ["glb", "gltf", "obj", "ply"];
+
+/// A path with `\` as `/`, `.` and `..` resolved, no leading `/`.
+fn normalise(path: &str) -> String {
+    join("", path).trim_start_matches('/').to_string()
+}
+
+fn base_name(path: &str) -> &str {
+    path.rsplit(['/', '\\']).next().unwrap_or(path)
+}
+
+fn extension(path: &str) -> String {
+    base_name(path)
+        .rsplit_once('.')
+        .map(|(_, e)| e.to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+fn stem(path: &str) -> &str {
+    let b = base_name(path);
+    b.rsplit_once('.').map_or(b, |(s, _)| s)
+}
+
+/// Whether a file name is a mesh's (`.glb`, `.gltf`, `.obj`, `.ply`).
+pub fn is_mesh_file(path: &str) -> bool {
+    MESH_EXTENSIONS.contains(&extension(path).as_str())
+}
+
+/// Whether an image's pixels are all pure black or pure white grey (a mask).
+fn black_and_white(bytes: &[u8]) -> bool {
+    decode_image(bytes, "", "").is_ok_and(|img| {
+        img.data
+            .chunks_exact(4)
+            .all(|p| p[0] == p[1] && p[1] == p[2] && (p[0] == 0 || p[0] == 255))
+    })
+}
+
+/// Compares names as people number things: `view2` before `view10`, case ignored.
+pub fn natural_cmp(a: &str, b: &str) -> Ordering {
+    fn chunks(s: &str) -> Vec<(bool, String)> {
+        let mut out: Vec<(bool, String)> = Vec::new();
+        for c in s.chars() {
+            let digit = c.is_ascii_digit();
+            match out.last_mut() {
+                Some((d, text)) if *d == digit => text.push(c),
+                _ => out.push((digit, c.to_string())),
+            }
+        }
+        out
+    }
+    let (x, y) = (chunks(a), chunks(b));
+    for ((dx, tx), (dy, ty)) in x.iter().zip(&y) {
+        let o = match (dx, dy) {
+            (true, true) => {
+                let (nx, ny) = (tx.trim_start_matches('0'), ty.trim_start_matches('0'));
+                nx.len().cmp(&ny.len()).then_with(|| nx.cmp(ny))
+            }
+            _ => tx.to_lowercase().cmp(&ty.to_lowercase()),
+        };
+        if o != Ordering::Equal {
+            return o;
+        }
+    }
+    x.len().cmp(&y.len()).then_with(|| a.cmp(b))
+}
+
+/// A JSON file of the set, parsed.
+struct JsonFile<'a> {
+    path: &'a str,
+    text: &'a str,
+    value: Value,
+}
+
+/// The set's files sorted by what they are.
+#[derive(Default)]
+struct Classified<'a> {
+    meshes: Vec<&'a str>,
+    pngs: Vec<&'a str>,
+    scenes: Vec<JsonFile<'a>>,
+    cameras: Vec<JsonFile<'a>>,
+}
+
+/// The mask and image of the view `name` among `pngs`, by the naming habits of the
+/// module doc. A mask and an image both written `NAME.png` mean "the two files of that
+/// name": [`FileSet::load_scene`] tells them apart by content.
+fn match_view(name: &str, pngs: &[&str]) -> (Option<String>, Option<String>) {
+    let n = name.to_lowercase();
+    let parts = |p: &str| {
+        let l = p.to_lowercase();
+        let mut it = l.rsplit('/');
+        let base = it.next().unwrap_or_default().to_string();
+        (it.next().unwrap_or_default().to_string(), base)
+    };
+    let is_mask = |p: &str| {
+        let (dir, base) = parts(p);
+        (matches!(dir.as_str(), "mask" | "masks") && base == format!("{n}.png"))
+            || ['.', '_', '-']
+                .iter()
+                .any(|c| base == format!("{n}{c}mask.png") || base == format!("mask{c}{n}.png"))
+    };
+    let is_image = |p: &str| {
+        let (dir, base) = parts(p);
+        (matches!(dir.as_str(), "image" | "images" | "rgb") && base == format!("{n}.png"))
+            || ['.', '_', '-'].iter().any(|c| {
+                ["image", "rgb", "color", "colour"]
+                    .iter()
+                    .any(|w| base == format!("{n}{c}{w}.png"))
+            })
+    };
+    let mask = pngs.iter().find(|p| is_mask(p)).map(|p| p.to_string());
+    let image = pngs.iter().find(|p| is_image(p)).map(|p| p.to_string());
+    let plain: Vec<&str> = pngs
+        .iter()
+        .copied()
+        .filter(|p| base_name(p).to_lowercase() == format!("{n}.png"))
+        .collect();
+    if let Some(mask) = mask {
+        let image = image.or_else(|| (plain.len() == 1 && plain[0] != mask).then(|| plain[0].to_string()));
+        return (Some(mask), image);
+    }
+    if plain.is_empty() {
+        return (None, image);
+    }
+    if let Some(image) = image {
+        let mask = plain.iter().find(|p| **p != image).map(|p| p.to_string());
+        return (mask, Some(image));
+    }
+    if plain.len() == 1 {
+        (Some(plain[0].to_string()), None)
+    } else {
+        (Some(format!("{name}.png")), Some(format!("{name}.png")))
+    }
+}
+
+impl FileSet {
+    /// An empty set.
+    pub fn new() -> FileSet {
+        FileSet::default()
+    }
+
+    /// Adds a file. Several files may share a path (a file chooser gives bare names,
+    /// so `images/a.png` and `masks/a.png` both arrive as `a.png`); an exact duplicate
+    /// (same path, same bytes) is ignored.
+    pub fn add(&mut self, path: &str, bytes: Vec<u8>) {
+        let path = normalise(path);
+        if !self.files.iter().any(|(p, b)| *p == path && *b == bytes) {
+            self.files.push((path, bytes));
+        }
+    }
+
+    /// The number of files.
+    pub fn len(&self) -> usize {
+        self.files.len()
+    }
+
+    /// Whether the set holds no file.
+    pub fn is_empty(&self) -> bool {
+        self.files.is_empty()
+    }
+
+    /// The files' paths, normalised (`/` separators, no `./`), in the order added.
+    pub fn names(&self) -> Vec<String> {
+        self.files.iter().map(|(p, _)| p.clone()).collect()
+    }
+
+    /// Loads a mesh file's bytes; a `.gltf`'s buffers are taken from this set, by
+    /// their URI joined onto the mesh's folder (then by name, like every lookup here).
+    pub fn load_mesh(&self, file_name: &str, bytes: &[u8]) -> Result<Mesh> {
+        let dir = parent_dir(file_name);
+        let resolve = |uri: &str| {
+            self.find(&join(dir, uri), FileRole::Other)
+                .ok()
+                .flatten()
+                .map(<[u8]>::to_vec)
+        };
+        load_mesh(file_name, bytes, &resolve)
+    }
+
+    /// The file a scene asks for as `wanted`: the file of that exact path; else the
+    /// one whose path ends with it, or it with the file's (`masks/a.png` is served by
+    /// `scene/masks/a.png` or by a bare `a.png`, never by `images/a.png`); else the
+    /// same ignoring case. Several files at the first level that matches are told
+    /// apart by `role`; `Err` names them when that fails. `Ok(None)`: no such file.
+    pub fn find(&self, wanted: &str, role: FileRole) -> std::result::Result<Option<&[u8]>, String> {
+        Ok(self.find_entry(wanted, role)?.map(|(_, bytes)| bytes.as_slice()))
+    }
+
+    /// As [`find`](Self::find), the matching (path, bytes) entry.
+    fn find_entry(&self, wanted: &str, role: FileRole) -> std::result::Result<Option<&(String, Vec<u8>)>, String> {
+        let w = normalise(wanted);
+        let suffix = |a: &str, b: &str| a.len() > b.len() && a.ends_with(b) && a[..a.len() - b.len()].ends_with('/');
+        let (wl, lower) = (w.to_ascii_lowercase(), |f: &str| f.to_ascii_lowercase());
+        let exact = |f: &str| f == w;
+        let by_suffix = |f: &str| suffix(f, &w) || suffix(&w, f);
+        let any_case = |f: &str| suffix(&lower(f), &wl) || suffix(&wl, &lower(f)) || lower(f) == wl;
+        let levels: [&dyn Fn(&str) -> bool; 3] = [&exact, &by_suffix, &any_case];
+        for matches in levels {
+            let hits: Vec<&(String, Vec<u8>)> = self.files.iter().filter(|(p, _)| matches(p)).collect();
+            if hits.len() == 1 {
+                return Ok(Some(hits[0]));
+            }
+            if hits.len() > 1 {
+                let keep: Vec<_> = match role {
+                    FileRole::Mask => hits.iter().filter(|f| black_and_white(&f.1)).collect(),
+                    FileRole::Image => hits.iter().filter(|f| !black_and_white(&f.1)).collect(),
+                    FileRole::Other => vec![],
+                };
+                if keep.len() == 1 {
+                    return Ok(Some(keep[0]));
+                }
+                let names: Vec<&str> = hits.iter().map(|f| f.0.as_str()).collect();
+                return Err(format!(
+                    "ambiguous: {} files could be it ({}); give the files in their folders \
+                     (drop the folder) so that their paths tell them apart",
+                    hits.len(),
+                    names.join(", ")
+                ));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Sorts the files: meshes, PNGs, scene files, camera files (others ignored).
+    fn classify(&self) -> Result<Classified<'_>> {
+        let mut out = Classified::default();
+        for (path, bytes) in &self.files {
+            let ext = extension(path);
+            if is_mesh_file(path) {
+                out.meshes.push(path);
+            } else if ext == "png" {
+                out.pngs.push(path);
+            } else if ext == "json" {
+                let bad = |problem: String| Error::Json {
+                    file: path.clone(),
+                    problem,
+                };
+                let text = std::str::from_utf8(bytes).map_err(|_| bad("not UTF-8 text".into()))?;
+                let value: Value = serde_json::from_str(text).map_err(|e| bad(format!("not valid JSON ({e})")))?;
+                let file = JsonFile { path, text, value };
+                let v = &file.value;
+                if v.get("mesh").is_some_and(Value::is_string) && v.get("views").is_some_and(Value::is_array) {
+                    out.scenes.push(file);
+                } else if v.get("camera").is_some_and(|c| !c.is_null()) || v.get("fx").is_some() {
+                    out.cameras.push(file);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Which file is the scene (or the mesh, when there is no scene); see the module doc.
+    /// Errors name the files: none given, several scene files, per-view cameras with no
+    /// mesh or several, a view without a mask, nothing that makes a scene.
+    pub fn plan(&self) -> Result<Plan> {
+        let files = |e: String| Error::Files(e);
+        if self.files.is_empty() {
+            return Err(files("no files were given".into()));
+        }
+        let Classified {
+            meshes,
+            pngs,
+            mut scenes,
+            cameras,
+        } = self.classify()?;
+        if scenes.len() > 1 {
+            let names: Vec<&str> = scenes.iter().map(|s| s.path).collect();
+            return Err(files(format!(
+                "several scene files ({}): give one scene at a time",
+                names.join(", ")
+            )));
+        }
+        if let Some(JsonFile { path, text, mut value }) = scenes.pop() {
+            // A mesh dropped under another name than the scene's: use it when it is the only one.
+            let wanted = value["mesh"].as_str().map(|m| base_name(m).to_lowercase());
+            let named_is_here = |w: &str| self.files.iter().any(|(p, _)| base_name(p).to_lowercase() == w);
+            if let (Some(w), [only]) = (wanted, meshes.as_slice()) {
+                if !named_is_here(&w) {
+                    value["mesh"] = Value::from(*only);
+                    return Ok(Plan::Scene {
+                        file: path.into(),
+                        text: value.to_string(),
+                    });
+                }
+            }
+            return Ok(Plan::Scene {
+                file: path.into(),
+                text: text.into(),
+            });
+        }
+        if !cameras.is_empty() {
+            let mesh = match meshes.as_slice() {
+                [one] => *one,
+                [] => {
+                    return Err(files(
+                        "no mesh: add a .glb, .gltf (with its .bin), .obj or .ply file".into(),
+                    ))
+                }
+                several => return Err(files(format!("several meshes ({}): choose one", several.join(", ")))),
+            };
+            let mut views = Vec::with_capacity(cameras.len());
+            for JsonFile { path, value, .. } in &cameras {
+                let name = value
+                    .get("name")
+                    .and_then(Value::as_str)
+                    .map_or_else(|| stem(path).to_string(), str::to_string);
+                let (found_mask, found_image) = match_view(&name, &pngs);
+                let given = |k: &str| value.get(k).and_then(Value::as_str).map(str::to_string);
+                let mask = given("mask").or(found_mask).ok_or_else(|| {
+                    files(format!(
+                        "view '{name}' ({path}): no mask: add {name}.png or masks/{name}.png"
+                    ))
+                })?;
+                let camera = value.get("camera").filter(|c| !c.is_null()).unwrap_or(value);
+                let mut view = json!({ "name": name, "mask": mask, "camera": camera });
+                if let Some(image) = given("image").or(found_image) {
+                    view["image"] = Value::from(image);
+                }
+                views.push(view);
+            }
+            views.sort_by(|a, b| natural_cmp(a["name"].as_str().unwrap(), b["name"].as_str().unwrap()));
+            let scene = json!({ "version": 1, "mesh": mesh, "views": views });
+            return Ok(Plan::Scene {
+                file: "cameras.json".into(),
+                text: scene.to_string(),
+            });
+        }
+        if let Some(mesh) = meshes.first() {
+            return Ok(Plan::MeshOnly { file: mesh.to_string() });
+        }
+        Err(files(format!(
+            "no scene.json or camera .json among {}: give a scene.json (or one camera .json per view) \
+             with the mesh, masks and images",
+            self.names().join(", ")
+        )))
+    }
+
+    /// The scene the files make ([`plan`](Self::plan), then [`load_scene`](Self::load_scene)),
+    /// with the scene file's path and the warnings. A mesh without a scene is loaded
+    /// (its own errors come first), then reported as lacking the scene.
+    pub fn load(&self) -> Result<(Scene, Vec<String>, String)> {
+        match self.plan()? {
+            Plan::Scene { file, text } => {
+                let (scene, warnings) = self.load_scene(&file, &text)?;
+                Ok((scene, warnings, file))
+            }
+            Plan::MeshOnly { file } => {
+                let bytes = &self
+                    .files
+                    .iter()
+                    .find(|(p, _)| *p == file)
+                    .expect("planned from the set")
+                    .1;
+                let mesh = self.load_mesh(&file, bytes)?;
+                Err(Error::Files(format!(
+                    "{file}: a valid mesh ({} triangles), but there is no scene: add a scene.json \
+                     (or one camera .json per view) and the masks",
+                    mesh.triangles.len()
+                )))
+            }
+        }
+    }
+
+    /// The scene `scene_file` (JSON `text`) with the mesh, masks and images it names
+    /// taken from this set (paths joined onto the scene file's folder, then
+    /// [`find`](Self::find), as a mask or an image), and warnings: an image not in
+    /// the set (or only as the view's mask) is left out, for images are only shown.
+    pub fn load_scene(&self, scene_file: &str, text: &str) -> Result<(Scene, Vec<String>)> {
+        let mut json = SceneJson::parse(text, scene_file)?;
+        let dir = parent_dir(scene_file);
+        let missing = |path: String| Error::MissingFile {
+            file: path,
+            referrer: scene_file.into(),
+        };
+        // Every mask and image found first, by role; `fetch` then serves them by the
+        // path written in the scene (an image written as its mask's path gets "#image").
+        let mut found: Vec<(String, &[u8])> = Vec::new();
+        let mut warnings = Vec::new();
+        for v in &mut json.views {
+            let mask = self
+                .find_entry(&join(dir, &v.mask), FileRole::Mask)
+                .map_err(|problem| Error::Mask {
+                    view: v.name.clone(),
+                    file: v.mask.clone(),
+                    problem,
+                })?
+                .ok_or_else(|| missing(join(dir, &v.mask)))?;
+            found.push((v.mask.clone(), &mask.1));
+            if let Some(ignore) = &v.ignore {
+                let entry = self
+                    .find_entry(&join(dir, ignore), FileRole::Mask)
+                    .map_err(|problem| Error::Mask {
+                        view: v.name.clone(),
+                        file: ignore.clone(),
+                        problem,
+                    })?
+                    .ok_or_else(|| missing(join(dir, ignore)))?;
+                found.push((ignore.clone(), &entry.1));
+            }
+            let Some(image) = v.image.take() else { continue };
+            match self.find_entry(&join(dir, &image), FileRole::Image) {
+                Ok(Some(entry)) if !std::ptr::eq(entry, mask) => {
+                    let key = if image == v.mask {
+                        format!("{image}#image")
+                    } else {
+                        image
+                    };
+                    found.push((key.clone(), &entry.1));
+                    v.image = Some(key);
+                }
+                Ok(_) => warnings.push(format!(
+                    "view '{}': image '{image}' not given: showing the mask",
+                    v.name
+                )),
+                Err(problem) => {
+                    return Err(Error::Image {
+                        view: v.name.clone(),
+                        file: image,
+                        problem,
+                    })
+                }
+            }
+        }
+        let mesh_path = join(dir, &json.mesh);
+        let mesh_bytes = self
+            .find(&mesh_path, FileRole::Other)
+            .map_err(|problem| Error::Mesh {
+                file: mesh_path.clone(),
+                problem,
+            })?
+            .ok_or_else(|| missing(mesh_path.clone()))?;
+        let mesh = self.load_mesh(&mesh_path, mesh_bytes)?;
+        let fetch = |rel: &str| -> Result<Vec<u8>> {
+            let bytes = found.iter().find(|(p, _)| p == rel).map(|(_, b)| b.to_vec());
+            bytes.ok_or_else(|| missing(join(dir, rel)))
+        };
+        let scene = scene_from_parts(scene_file, json, mesh, &fetch)?;
+        warnings.extend(scene.warnings.iter().cloned());
+        Ok((scene, warnings))
+    }
+}
+
+/// The files a scene file names — its mesh, and each view's mask, image and ignore
+/// mask — as paths joined onto the scene file's folder, each once, in that order: what
+/// to fetch to load it. A mesh's own files (a `.gltf`'s buffers) are [`mesh_references`].
+pub fn scene_references(scene_file: &str, text: &str) -> Result<Vec<String>> {
+    let bad = |problem: String| Error::Json {
+        file: scene_file.into(),
+        problem,
+    };
+    let v: Value = serde_json::from_str(text).map_err(|e| bad(format!("not valid JSON ({e})")))?;
+    let mesh = v["mesh"]
+        .as_str()
+        .ok_or_else(|| bad("no \"mesh\": expected the mesh file's path".into()))?;
+    let views = v["views"]
+        .as_array()
+        .ok_or_else(|| bad("no \"views\": expected a list of views".into()))?;
+    let dir = parent_dir(scene_file);
+    let mut out = vec![join(dir, mesh)];
+    for view in views {
+        for key in ["mask", "image", "ignore"] {
+            if let Some(p) = view[key].as_str() {
+                let p = join(dir, p);
+                if !out.contains(&p) {
+                    out.push(p);
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The external files a mesh file refers to (a glTF's buffers that are not data URIs),
+/// as paths joined onto the mesh's folder; none for other formats or unreadable files
+/// (loading the mesh then says what is wrong).
+pub fn mesh_references(mesh_file: &str, bytes: &[u8]) -> Vec<String> {
+    let json: Option<Value> = if bytes.starts_with(b"glTF") {
+        gltf::binary::Glb::from_slice(bytes)
+            .ok()
+            .and_then(|glb| serde_json::from_slice(&glb.json).ok())
+    } else if extension(mesh_file) == "gltf" {
+        serde_json::from_slice(bytes).ok()
+    } else {
+        None
+    };
+    let dir = parent_dir(mesh_file);
+    json.as_ref()
+        .and_then(|v| v["buffers"].as_array())
+        .into_iter()
+        .flatten()
+        .filter_map(|b| b["uri"].as_str())
+        .filter(|u| !u.starts_with("data:"))
+        .map(|u| join(dir, u))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::gltf_write;
+    use crate::io::png::{encode_gray, encode_rgba};
+    use crate::shapes::blob_mesh;
+    use crate::synth::{synthesize, SynthSettings};
+    use crate::{CameraJson, PoseJson, ViewJson};
+
+    /// A 3-view scene of a small blob, as files: (mesh bytes, per-view (camera JSON,
+    /// mask PNG, image PNG), scene JSON naming `mesh` and `masks/…`, `images/…`).
+    struct Parts {
+        glb: Vec<u8>,
+        views: Vec<(String, Vec<u8>, Vec<u8>)>,
+        scene: String,
+    }
+
+    fn parts() -> Parts {
+        let mesh = blob_mesh(7, 11);
+        let settings = SynthSettings {
+            views: 3,
+            width: 48,
+            height: 40,
+            seed: 2,
+            images: true,
+            ..Default::default()
+        };
+        let s = synthesize(&mesh, &settings, None).unwrap();
+        let mut views = Vec::new();
+        let mut json_views = Vec::new();
+        for (i, v) in s.views().iter().enumerate() {
+            let grey: Vec<u8> = v.mask().data.iter().map(|&o| o * 255).collect();
+            let camera = CameraJson::from_camera(v.camera());
+            views.push((
+                serde_json::to_string(&camera).unwrap(),
+                encode_gray(v.mask().width, v.mask().height, &grey),
+                encode_rgba(&s.images[i]),
+            ));
+            json_views.push(ViewJson {
+                ignore: None,
+                name: v.name().to_string(),
+                image: Some(format!("images/{}.png", v.name())),
+                mask: format!("masks/{}.png", v.name()),
+                camera,
+            });
+        }
+        let scene = SceneJson {
+            version: 1,
+            mesh: "blob.glb".into(),
+            views: json_views,
+            initial_pose: None,
+            ground_truth_pose: Some(PoseJson::from_pose(&s.pose)),
+            grasps: vec![],
+        };
+        Parts {
+            glb: gltf_write::glb(&mesh, "blob.glb").unwrap(),
+            views,
+            scene: scene.to_json_string(),
+        }
+    }
+
+    /// The scene folder as dropped: `dir/scene.json`, `dir/blob.glb`, `dir/masks/…`, `dir/images/…`.
+    fn folder(p: &Parts, dir: &str) -> FileSet {
+        let mut set = FileSet::new();
+        set.add(&format!("{dir}/scene.json"), p.scene.clone().into_bytes());
+        set.add(&format!("{dir}/blob.glb"), p.glb.clone());
+        for (i, (_, mask, image)) in p.views.iter().enumerate() {
+            set.add(&format!("{dir}/masks/view{i}.png"), mask.clone());
+            set.add(&format!("{dir}/images/view{i}.png"), image.clone());
+        }
+        set
+    }
+
+    fn message<T: std::fmt::Debug>(r: Result<T>) -> String {
+        r.unwrap_err().to_string()
+    }
+
+    #[test]
+    fn a_scene_json_and_its_files_load_from_a_folder_or_from_bare_names() {
+        let p = parts();
+        let set = folder(&p, "scene");
+        assert_eq!(
+            set.plan().unwrap(),
+            Plan::Scene {
+                file: "scene/scene.json".into(),
+                text: p.scene.clone()
+            }
+        );
+        let (scene, warnings, file) = set.load().unwrap();
+        assert_eq!(file, "scene/scene.json");
+        assert!(warnings.is_empty(), "{warnings:?}");
+        assert_eq!(scene.views.len(), 3);
+        assert!(scene.views.iter().all(|v| v.image().is_some() && v.mask().area() > 20));
+        // A file chooser gives bare names: masks/view0.png and images/view0.png are both view0.png.
+        let mut flat = FileSet::new();
+        for name in set.names() {
+            let bytes = set.find(&name, FileRole::Other).unwrap().unwrap().to_vec();
+            flat.add(base_name(&name), bytes);
+        }
+        let (flat_scene, warnings, _) = flat.load().unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        for (a, b) in flat_scene.views.iter().zip(&scene.views) {
+            assert!(
+                a.mask() == b.mask() && a.image() == b.image(),
+                "view {}: mask and image in their places",
+                a.name()
+            );
+        }
+        // Masks only: the scene loads, with a warning per missing image.
+        let mut masks_only = FileSet::new();
+        for name in set.names().into_iter().filter(|n| !n.contains("images/")) {
+            masks_only.add(&name, set.find(&name, FileRole::Other).unwrap().unwrap().to_vec());
+        }
+        let (_, warnings, _) = masks_only.load().unwrap();
+        assert_eq!(warnings.len(), 3);
+        assert!(warnings[1].contains("view 'view1'") && warnings[1].contains("images/view1.png"));
+    }
+
+    #[test]
+    fn a_mesh_under_another_name_serves_the_scene_when_it_is_the_only_one() {
+        let p = parts();
+        let mut set = FileSet::new();
+        set.add("scene.json", p.scene.clone().into_bytes());
+        set.add("models/my-blob.glb", p.glb.clone());
+        for (i, (_, mask, _)) in p.views.iter().enumerate() {
+            set.add(&format!("masks/view{i}.png"), mask.clone());
+        }
+        let Plan::Scene { text, .. } = set.plan().unwrap() else {
+            panic!("a scene")
+        };
+        assert!(text.contains("\"mesh\":\"models/my-blob.glb\""), "{text}");
+        assert_eq!(set.load().unwrap().0.views.len(), 3);
+        // With two meshes, neither named by the scene, nothing is guessed.
+        set.add("other.ply", crate::io::ply::write_ascii(&blob_mesh(5, 5), "x"));
+        let e = message(set.load());
+        assert!(e.contains("blob.glb") && e.contains("not found"), "{e}");
+    }
+
+    #[test]
+    fn per_view_camera_files_find_their_masks_and_images_by_name() {
+        let p = parts();
+        let mut set = FileSet::new();
+        set.add("blob.glb", p.glb.clone());
+        // view0: masks/ and images/ folders; view1: NAME_mask.png, NAME_rgb.png; view2: a lone NAME.png.
+        let [v0, v1, v2] = [&p.views[0], &p.views[1], &p.views[2]];
+        set.add("cams/view0.json", v0.0.clone().into_bytes());
+        set.add("masks/view0.png", v0.1.clone());
+        set.add("images/view0.png", v0.2.clone());
+        set.add("view1.json", v1.0.clone().into_bytes());
+        set.add("view1_mask.png", v1.1.clone());
+        set.add("view1_rgb.png", v1.2.clone());
+        set.add("view2.json", v2.0.clone().into_bytes());
+        set.add("View2.PNG", v2.1.clone());
+        set.add("notes.txt", b"ignored".to_vec());
+        let Plan::Scene { file, text } = set.plan().unwrap() else {
+            panic!("a scene")
+        };
+        assert_eq!(file, "cameras.json");
+        let v: Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v["mesh"], "blob.glb");
+        let views = v["views"].as_array().unwrap();
+        let get = |i: usize, k: &str| views[i][k].as_str().map(str::to_string);
+        assert_eq!(get(0, "mask").as_deref(), Some("masks/view0.png"));
+        assert_eq!(get(0, "image").as_deref(), Some("images/view0.png"));
+        assert_eq!(get(1, "mask").as_deref(), Some("view1_mask.png"));
+        assert_eq!(get(1, "image").as_deref(), Some("view1_rgb.png"));
+        assert_eq!(get(2, "mask").as_deref(), Some("View2.PNG"));
+        assert_eq!(get(2, "image"), None);
+        let (scene, warnings, _) = set.load().unwrap();
+        assert!(warnings.is_empty());
+        assert_eq!(scene.views[2].name(), "view2");
+        assert!(scene.views[0].image().is_some() && scene.views[2].image().is_none());
+    }
+
+    #[test]
+    fn a_mask_and_an_image_of_the_same_name_are_told_apart_by_their_pixels() {
+        let p = parts();
+        let mut set = FileSet::new();
+        set.add("blob.glb", p.glb.clone());
+        for (i, (camera, mask, image)) in p.views.iter().enumerate() {
+            set.add(&format!("view{i}.json"), camera.clone().into_bytes());
+            set.add(&format!("view{i}.png"), image.clone());
+            set.add(&format!("view{i}.png"), mask.clone());
+        }
+        let (scene, warnings, _) = set.load().unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let from_folder = folder(&p, "s").load().unwrap().0;
+        for (a, b) in scene.views.iter().zip(&from_folder.views) {
+            assert!(
+                a.mask() == b.mask(),
+                "view {}: the black-and-white file is the mask",
+                a.name()
+            );
+            assert!(a.image() == b.image(), "view {}: the other one is the image", a.name());
+        }
+        // Two images of one name cannot be told apart.
+        let mut two = FileSet::new();
+        two.add("a/x.png", p.views[0].2.clone());
+        two.add("b/x.png", p.views[1].2.clone());
+        let e = two.find("x.png", FileRole::Image).unwrap_err();
+        assert!(
+            e.contains("ambiguous") && e.contains("a/x.png") && e.contains("b/x.png"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn views_are_in_natural_order_and_may_carry_their_own_names_and_masks() {
+        let p = parts();
+        let mut set = FileSet::new();
+        set.add("blob.ply", crate::io::ply::write_ascii(&blob_mesh(7, 11), "blob"));
+        for (i, n) in [10, 2, 1].iter().enumerate() {
+            // A scene view entry: a name, a mask path, the camera under "camera".
+            let camera: Value = serde_json::from_str(&p.views[i].0).unwrap();
+            let entry = json!({ "name": format!("cam{n}"), "mask": format!("m/{n}.png"), "camera": camera });
+            set.add(&format!("c{n}.json"), entry.to_string().into_bytes());
+            set.add(&format!("m/{n}.png"), p.views[i].1.clone());
+        }
+        let (scene, _, _) = set.load().unwrap();
+        let names: Vec<&str> = scene.views.iter().map(|v| v.name()).collect();
+        assert_eq!(names, ["cam1", "cam2", "cam10"]);
+        assert_eq!(natural_cmp("view2", "view10"), Ordering::Less);
+        assert_eq!(natural_cmp("View2", "view02"), Ordering::Less);
+        assert_eq!(natural_cmp("b", "A"), Ordering::Greater);
+    }
+
+    #[test]
+    fn what_is_missing_or_ambiguous_is_named() {
+        let p = parts();
+        let camera = p.views[0].0.clone().into_bytes();
+        let mut no_mesh = FileSet::new();
+        no_mesh.add("view0.json", camera.clone());
+        no_mesh.add("view0.png", p.views[0].1.clone());
+        assert!(message(no_mesh.plan()).starts_with("no mesh: add a .glb, .gltf (with its .bin), .obj or .ply"));
+        let mut two = no_mesh.clone();
+        two.add("a.glb", p.glb.clone());
+        two.add("b.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".to_vec());
+        assert_eq!(message(two.plan()), "several meshes (a.glb, b.obj): choose one");
+        let mut no_mask = FileSet::new();
+        no_mask.add("a.glb", p.glb.clone());
+        no_mask.add("left.json", camera);
+        assert_eq!(
+            message(no_mask.plan()),
+            "view 'left' (left.json): no mask: add left.png or masks/left.png"
+        );
+        let mut scenes = folder(&p, "a");
+        scenes.add("b/scene.json", p.scene.clone().into_bytes());
+        let e = message(scenes.plan());
+        assert!(e.starts_with("several scene files (a/scene.json, b/scene.json)"), "{e}");
+        let mut bad = FileSet::new();
+        bad.add("scene.json", b"{ nope".to_vec());
+        assert!(message(bad.plan()).starts_with("scene.json: not valid JSON"));
+        let mut nothing = FileSet::new();
+        nothing.add("masks/a.png", p.views[0].1.clone());
+        nothing.add("readme.txt", vec![]);
+        let e = message(nothing.plan());
+        assert!(
+            e.starts_with("no scene.json or camera .json among masks/a.png, readme.txt"),
+            "{e}"
+        );
+        assert_eq!(message(FileSet::new().plan()), "no files were given");
+    }
+
+    #[test]
+    fn a_mesh_alone_of_each_type_is_checked_and_said_to_lack_a_scene() {
+        let mesh = blob_mesh(7, 11);
+        let n = mesh.triangles.len();
+        let (gltf, bin) = gltf_write::gltf_and_bin(&mesh, "m.gltf", "m.bin").unwrap();
+        let obj: String = mesh
+            .positions
+            .iter()
+            .map(|p| format!("v {} {} {}\n", p.x, p.y, p.z))
+            .chain(
+                mesh.triangles
+                    .iter()
+                    .map(|t| format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1)),
+            )
+            .collect();
+        type Files<'a> = Vec<(&'a str, Vec<u8>)>;
+        let cases: [(&str, Files); 4] = [
+            ("m.glb", vec![("m.glb", gltf_write::glb(&mesh, "m.glb").unwrap())]),
+            (
+                "dir/m.gltf",
+                vec![("dir/m.gltf", gltf.into_bytes()), ("dir/m.bin", bin)],
+            ),
+            ("m.obj", vec![("m.obj", obj.into_bytes())]),
+            ("M.PLY", vec![("M.PLY", crate::io::ply::write_ascii(&mesh, "m"))]),
+        ];
+        for (file, files) in cases {
+            let mut set = FileSet::new();
+            for (p, b) in files {
+                set.add(p, b);
+            }
+            assert_eq!(set.plan().unwrap(), Plan::MeshOnly { file: file.into() });
+            let e = message(set.load());
+            assert_eq!(
+                e,
+                format!(
+                    "{file}: a valid mesh ({n} triangles), but there is no scene: add a scene.json \
+                     (or one camera .json per view) and the masks"
+                )
+            );
+        }
+        let mut broken = FileSet::new();
+        broken.add("broken.glb", b"glTF\x02\x00\x00\x00garbage".to_vec());
+        let e = message(broken.load());
+        assert!(e.starts_with("mesh 'broken.glb'"), "{e}");
+        assert!(is_mesh_file("a/B.Ply") && !is_mesh_file("a.bin"));
+    }
+
+    #[test]
+    fn find_goes_by_path_then_suffix_then_case() {
+        let mut set = FileSet::new();
+        set.add("scene/masks/a.png", vec![1]);
+        set.add("scene/images/a.png", vec![2]);
+        set.add("Models/Duck.GLB", vec![3]);
+        assert_eq!(
+            set.find("scene/masks/a.png", FileRole::Other).unwrap(),
+            Some(&[1u8][..])
+        );
+        assert_eq!(
+            set.find("./masks/../images/a.png", FileRole::Other).unwrap(),
+            Some(&[2u8][..])
+        );
+        assert_eq!(set.find("masks/a.png", FileRole::Other).unwrap(), Some(&[1u8][..]));
+        assert_eq!(set.find("duck.glb", FileRole::Other).unwrap(), Some(&[3u8][..]));
+        assert!(set.find("a.png", FileRole::Other).unwrap_err().contains("ambiguous"));
+        assert_eq!(set.find("other/a.png", FileRole::Other).unwrap(), None);
+        set.add("scene/masks/a.png", vec![1]);
+        assert_eq!(set.len(), 3, "an exact duplicate is ignored");
+    }
+
+    #[test]
+    fn the_files_a_scene_and_a_gltf_name_are_listed() {
+        let text = r#"{"mesh": "../models/m.gltf", "views": [
+            {"name": "a", "mask": "masks/a.png", "image": "images/a.png", "ignore": "masks/a_ignore.png", "camera": {}},
+            {"name": "b", "mask": "masks/b.png", "image": "masks/b.png", "camera": {}}]}"#;
+        assert_eq!(
+            scene_references("ex/toy/scene.json", text).unwrap(),
+            [
+                "ex/models/m.gltf",
+                "ex/toy/masks/a.png",
+                "ex/toy/images/a.png",
+                "ex/toy/masks/a_ignore.png",
+                "ex/toy/masks/b.png"
+            ]
+        );
+        assert!(message(scene_references("s.json", "{\"views\": []}")).contains("\"mesh\""));
+        let mesh = blob_mesh(5, 5);
+        let (gltf, _) = gltf_write::gltf_and_bin(&mesh, "m.gltf", "bufs/m.bin").unwrap();
+        assert_eq!(
+            mesh_references("ex/models/m.gltf", gltf.as_bytes()),
+            ["ex/models/bufs/m.bin"]
+        );
+        assert!(mesh_references("m.glb", &gltf_write::glb(&mesh, "m.glb").unwrap()).is_empty());
+        assert!(mesh_references("m.ply", b"ply\n").is_empty());
+    }
+}
