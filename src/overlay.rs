@@ -83,6 +83,68 @@ pub fn overlay_with(view: &View, rendered: Option<&Mask>, style: &OverlayStyle) 
     img
 }
 
+/// A view's object window as an overlay of `size`×`size` pixels (SPEC §4: in a real
+/// photograph the object covers 50–150 px, so the page shows its window): the
+/// window's part of the image (or mask), enlarged with nearest-pixel sampling (pixels
+/// outside the image dark, ignored pixels dimmed), the mask's outline and — given
+/// the mesh and pose — the contour of the mesh rendered *through the window camera at
+/// `size`* (sharp, not an enlarged contour). `extra` draws more on the overlay with
+/// the window camera (e.g. grasp rectangles).
+pub fn overlay_window(
+    view: &View,
+    window: &crate::loss::target::Window,
+    size: u32,
+    posed: Option<(&crate::mesh::Mesh, &crate::pose::Pose)>,
+    style: &OverlayStyle,
+) -> (Rgba, crate::camera::Camera) {
+    let size = size.clamp(8, 2048);
+    let mask = view.mask();
+    let (iw, ih) = (mask.width as i64, mask.height as i64);
+    let cam = window.camera(view.camera(), size, size);
+    let k = size as f64 / window.width;
+    let mut img = Rgba {
+        width: size,
+        height: size,
+        data: vec![0; (size * size * 4) as usize],
+    };
+    let mut mask_win = Mask::empty(size, size);
+    for y in 0..size {
+        let sy = (window.y0 + (y as f64 + 0.5) / k + 0.5).floor() as i64;
+        for x in 0..size {
+            let sx = (window.x0 + (x as f64 + 0.5) / k + 0.5).floor() as i64;
+            let o = ((y * size + x) * 4) as usize;
+            if sx < 0 || sy < 0 || sx >= iw || sy >= ih {
+                img.data[o..o + 4].copy_from_slice(&[12, 12, 16, 255]);
+                continue;
+            }
+            let i = (sy * iw + sx) as usize;
+            let mut px = match view.image() {
+                Some(im) => [im.data[4 * i], im.data[4 * i + 1], im.data[4 * i + 2], 255],
+                None => {
+                    let g = if mask.data[i] != 0 {
+                        NO_IMAGE_OBJECT
+                    } else {
+                        NO_IMAGE_BACKGROUND
+                    };
+                    [g, g, g, 255]
+                }
+            };
+            if !view.is_known(i) {
+                px = [px[0] / 3, px[1] / 3, px[2] / 3 + 40, 255];
+            }
+            img.data[o..o + 4].copy_from_slice(&px);
+            mask_win.data[(y * size + x) as usize] = mask.data[i];
+        }
+    }
+    let width = style.line_width.unwrap_or(if size >= 512 { 2 } else { 1 }).clamp(1, 2);
+    draw_contour(&mut img, &mask_win, style.mask_colour, width);
+    if let Some((mesh, pose)) = posed {
+        let rendered = crate::raster::hard::render(mesh, pose, &cam);
+        draw_contour(&mut img, &rendered, style.render_colour, width);
+    }
+    (img, cam)
+}
+
 /// Nearest-pixel resize of a mask to `w`×`h`.
 fn stretch(m: &Mask, w: u32, h: u32) -> Mask {
     let mut out = Mask::empty(w, h);
@@ -227,6 +289,74 @@ mod tests {
     fn px(img: &Rgba, x: u32, y: u32) -> [u8; 4] {
         let i = ((y * img.width + x) * 4) as usize;
         img.data[i..i + 4].try_into().unwrap()
+    }
+
+    #[test]
+    fn window_overlay_shows_the_object_large() {
+        use crate::loss::target::{Window, WindowMode};
+        let mesh = crate::synth::blob_mesh(8, 12);
+        let s = crate::synth::synthesize(
+            &mesh,
+            &crate::synth::SynthSettings {
+                views: 1,
+                width: 320,
+                height: 240,
+                fill: 0.2,
+                ..Default::default()
+            },
+            None,
+        )
+        .unwrap();
+        let v = &s.views()[0];
+        let win = Window::for_view(v, WindowMode::Object { margin: 0.3 });
+        let (img, cam) = overlay_window(v, &win, 200, Some((&mesh, &s.pose)), &OverlayStyle::default());
+        assert_eq!((img.width, img.height, cam.width), (200, 200, 200));
+        let is = |x: i64, y: i64, c: [u8; 4]| {
+            x >= 0 && y >= 0 && x < 200 && y < 200 && img.data[((y * 200 + x) * 4) as usize..][..4] == c
+        };
+        // Magenta (the render's contour) pixels with green (the mask's outline) within 3 px.
+        let near = |img_is: &dyn Fn(i64, i64, [u8; 4]) -> bool| {
+            let (mut n, mut close) = (0, 0);
+            for y in 0..200i64 {
+                for x in 0..200i64 {
+                    if img_is(x, y, [255, 0, 255, 255]) {
+                        n += 1;
+                        let g = (-3..=3).any(|dy| (-3..=3).any(|dx| img_is(x + dx, y + dy, [0, 255, 0, 255])));
+                        close += usize::from(g);
+                    }
+                }
+            }
+            (n, close as f64 / n.max(1) as f64)
+        };
+        let (n, at_truth) = near(&is);
+        assert!(
+            n > 150 && at_truth > 0.8,
+            "{n} contour pixels, {at_truth} near the outline"
+        );
+        // Off the truth by a tenth of the window: the contours part.
+        let off = crate::pose::Pose {
+            translation: s.pose.translation
+                + cam.rotation.transpose()
+                    * glam::DVec3::new(
+                        0.1 * win.width * cam.to_camera(s.pose.translation).z / v.camera().fx,
+                        0.0,
+                        0.0,
+                    ),
+            ..s.pose
+        };
+        let (img2, _) = overlay_window(v, &win, 200, Some((&mesh, &off)), &OverlayStyle::default());
+        let is2 = |x: i64, y: i64, c: [u8; 4]| {
+            x >= 0 && y >= 0 && x < 200 && y < 200 && img2.data[((y * 200 + x) * 4) as usize..][..4] == c
+        };
+        let (_, off_truth) = near(&is2);
+        assert!(off_truth < 0.5, "{off_truth}");
+        // The object fills a good part of the window: grey object pixels.
+        let grey = img
+            .data
+            .chunks_exact(4)
+            .filter(|p| p[0] == NO_IMAGE_OBJECT && p[1] == NO_IMAGE_OBJECT)
+            .count();
+        assert!(grey > 200 * 200 / 5, "{grey}");
     }
 
     #[test]

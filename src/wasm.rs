@@ -63,6 +63,8 @@ export interface Progress {
   termination: null | "converged" | "max_iterations" | "stalled";
   /** The verdict once the fit is done: "ok", "poor" or "failed" (a failed fit is never "converged"). */
   verdict: null | "ok" | "poor" | "failed";
+  /** Why the verdict is not "ok", one line each; the views it doubts. */
+  verdict_reasons: string[]; doubted_views: string[];
   done: boolean;
   /** Seconds spent in step() so far. */
   seconds: number;

@@ -6,6 +6,7 @@ const ui = {
   drop: $('drop'), input: $('file-input'), example: $('load-example'), choice: $('example-choice'),
   start: $('start'), pause: $('pause'), step: $('step'), reset: $('reset'), download: $('download'),
   status: $('status'), rate: $('rate'), error: $('error'), notice: $('notice'), views: $('views'), loss: $('loss'),
+  verdict: $('verdict'), fullFrame: $('full-frame'),
 };
 
 let worker = null;
@@ -156,6 +157,8 @@ ui.reset.addEventListener('click', () => {
   send('reset');
 });
 ui.download.addEventListener('click', () => send('result'));
+// Each view shows its object window by default; the toggle shows the whole image.
+ui.fullFrame.addEventListener('change', () => send('view', { full: ui.fullFrame.checked }));
 
 function updateButtons() {
   const loaded = state !== 'empty';
@@ -185,7 +188,7 @@ function buildViews(list) {
     canvas.height = v.height;
     fig.querySelector('.name').textContent = v.name;
     ui.views.append(fig);
-    return { ...v, canvas, ctx: canvas.getContext('2d'), iou: fig.querySelector('.iou') };
+    return { ...v, fig, canvas, ctx: canvas.getContext('2d'), iou: fig.querySelector('.iou') };
   });
 }
 
@@ -195,9 +198,13 @@ function paint() {
   if (!msg || msg.overlays.length !== views.length) return;
   const p = msg.progress;
   views.forEach((v, i) => {
-    v.ctx.putImageData(new ImageData(new Uint8ClampedArray(msg.overlays[i]), v.width, v.height), 0, 0);
+    // An object window (msg.size square) or the whole image (the view's size).
+    const [w, h] = msg.size ? [msg.size, msg.size] : [v.width, v.height];
+    if (v.canvas.width !== w || v.canvas.height !== h) Object.assign(v.canvas, { width: w, height: h });
+    v.ctx.putImageData(new ImageData(new Uint8ClampedArray(msg.overlays[i]), w, h), 0, 0);
     v.iou.textContent = p.iou[i].toFixed(3);
   });
+  showVerdict(p);
   drawLoss(msg.losses);
   showPose(p.pose);
   ui.status.textContent = statusText(p);
@@ -217,13 +224,30 @@ function paint() {
 function statusText(p) {
   const secs = `${p.seconds.toFixed(2)} s`;
   if (p.done) {
-    const why = p.termination === 'converged' ? '' : ` (${p.termination.replace('_', ' ')})`;
-    return `converged${why} in ${p.iteration} iterations, ${secs}`;
+    // A failed fit is never "converged": the verdict comes first.
+    const why = p.termination.replace('_', ' ');
+    return `done — verdict ${p.verdict} (${why}) in ${p.iteration} iterations, ${secs}`;
   }
   const prefix = state === 'paused' ? 'paused — ' : state === 'ready' && p.iteration === 0 && p.searched === 0 ? 'ready — ' : '';
   if (p.phase === 'search') return `${prefix}search: ${p.searched}/${p.search_total} orientations, ${secs}`;
   const loss = Number.isFinite(p.loss) ? `, loss ${p.loss.toFixed(4)}` : '';
   return `${prefix}refine: stage ${p.stage + 1}/${p.stages}, candidate ${p.candidate + 1}, iteration ${p.iteration}${loss}, ${secs}`;
+}
+
+// The verdict, plainly: ok / poor / failed, with its reasons and the views it doubts.
+function showVerdict(p) {
+  const el = ui.verdict;
+  if (!p.done || !p.verdict) {
+    el.hidden = true;
+    return;
+  }
+  el.hidden = false;
+  el.className = `verdict ${p.verdict}`;
+  el.dataset.verdict = p.verdict;
+  const label = { ok: 'ok — every view agrees with the pose', poor: 'poor — some views disagree', failed: 'failed — the pose does not explain the masks' }[p.verdict];
+  const doubted = p.doubted_views.length ? ` Doubted: ${p.doubted_views.join(', ')}.` : '';
+  el.textContent = `Verdict: ${label}.${doubted}${p.verdict_reasons.length ? ' ' + p.verdict_reasons.join('; ') + '.' : ''}`;
+  views.forEach((v, i) => v.fig.classList.toggle('doubted', p.doubted_views.includes(v.name)));
 }
 
 const fmt = (xs, d = 3) => xs.map((x) => x.toFixed(d)).join('  ');

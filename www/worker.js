@@ -1,16 +1,19 @@
 // The fit's home: a module Web Worker that owns the wasm Session, so the page never
 // waits for it. Which dropped file is the scene, the mesh, a mask or an image is
 // decided in Rust (Session.fromFiles); this file only moves bytes and messages.
-// Messages in: load {files}, example {path}, start, pause, step, reset, result.
-// Messages out: loaded {views, warnings}, frame {progress, losses, overlays, running},
+// Messages in: load {files}, example {path}, start, pause, step, reset, result,
+// view {full}. Messages out: loaded {views, warnings},
+// frame {progress, losses, overlays, size, running},
 // result {json}, error {message, fatal}. Every error — a load, a command, or a slice
 // of the fitting loop — is caught and posted as an error, and the loop stops.
 import init, { FileSet, Session, sceneFiles, meshFiles } from './pkg/localisebot.js';
 
 const BUDGET_MS = 30; // work per frame: about 30 frames a second while fitting
+const WINDOW_PX = 256; // side of an object-window overlay
 const ready = init();
 let session = null;
 let running = false;
+let fullFrame = false; // overlays of the whole image instead of each view's object window
 
 const post = (msg, transfer = []) => postMessage(msg, transfer);
 
@@ -22,12 +25,16 @@ function fail(e) {
   post({ type: 'error', message: e?.message ?? String(e), fatal, running: false });
 }
 
-// Sends the current state: progress, loss trace and every view's overlay.
+// Sends the current state: progress, loss trace and every view's overlay — its
+// object window (WINDOW_PX square) or, when asked, the whole image.
 function frame(progress = session.progress()) {
   const losses = session.losses();
   const overlays = [];
-  for (let i = 0; i < session.viewCount; i++) overlays.push(session.overlay(i).buffer);
-  post({ type: 'frame', progress, losses, overlays, running }, [losses.buffer, ...overlays]);
+  for (let i = 0; i < session.viewCount; i++) {
+    overlays.push((fullFrame ? session.overlay(i) : session.overlayWindow(i, WINDOW_PX)).buffer);
+  }
+  const size = fullFrame ? null : WINDOW_PX;
+  post({ type: 'frame', progress, losses, overlays, size, running }, [losses.buffer, ...overlays]);
 }
 
 // files: [{ path, bytes }], as dropped or fetched.
@@ -101,6 +108,10 @@ const handlers = {
     frame();
   },
   result: () => session && post({ type: 'result', json: session.resultJson() }),
+  view: (msg) => {
+    fullFrame = Boolean(msg.full);
+    if (session) frame();
+  },
 };
 
 onmessage = async ({ data }) => {

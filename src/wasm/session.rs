@@ -41,6 +41,8 @@ struct ProgressOut<'a> {
     done: bool,
     seconds: f64,
     iou: Vec<f64>,
+    verdict_reasons: Vec<String>,
+    doubted_views: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -128,6 +130,12 @@ impl Session {
             done: self.est.is_done(),
             seconds: self.seconds,
             iou,
+            verdict_reasons: self.est.judgement().map(|j| j.reasons.clone()).unwrap_or_default(),
+            doubted_views: self
+                .est
+                .judgement()
+                .map(|j| j.doubted_views.clone())
+                .unwrap_or_default(),
         })
     }
 }
@@ -262,6 +270,29 @@ impl Session {
         let mut img = overlay::overlay(v, Some(&rendered));
         // The scene's grasps, carried by the current pose into this view.
         crate::grasp::draw_grasps(&mut img, &self.grasps, &self.est.pose(), v.camera());
+        Ok(Clamped(img.data))
+    }
+
+    /// View `view`'s object window at the current pose, `size`×`size` RGBA8 (8–2048):
+    /// the window's part of the image enlarged, the mask's outline and the contour of
+    /// the mesh rendered through the window at that size, and the grasps.
+    #[wasm_bindgen(js_name = overlayWindow)]
+    pub fn overlay_window(&mut self, view: usize, size: u32) -> Result<Clamped<Vec<u8>>, JsError> {
+        let n = self.est.views().len();
+        if view >= n {
+            return Err(JsError::new(&format!("no view {view}: the session has {n} views")));
+        }
+        let pose = self.est.pose();
+        let v = &self.est.views()[view];
+        let window = self.est.windows()[view];
+        let (mut img, cam) = overlay::overlay_window(
+            v,
+            &window,
+            size,
+            Some((self.est.mesh(), &pose)),
+            &overlay::OverlayStyle::default(),
+        );
+        crate::grasp::draw_grasps(&mut img, &self.grasps, &pose, &cam);
         Ok(Clamped(img.data))
     }
 

@@ -9,6 +9,7 @@
 // target/e2e/ (or $E2E_ARTIFACTS). Timings are printed, never asserted.
 import { chromium } from 'playwright-core';
 import { execFileSync, spawn } from 'node:child_process';
+import { deflateSync } from 'node:zlib';
 import { existsSync, mkdirSync, readFileSync, readdirSync, statSync } from 'node:fs';
 import { dirname, join, relative } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -40,6 +41,48 @@ function synthScene(name, args) {
 const gltfScene = synthScene('toy-gltf', ['--shape', 'toy', '--mesh-format', 'gltf', '--views', '3', '--seed', '5',
   '--width', '240', '--height', '200']);
 const plyScene = synthScene('toy-ply', ['--shape', 'toy', '--mesh-format', 'ply', '--views', '3', '--seed', '9']);
+
+// An 8-bit grey PNG (zlib from Node), for masks made here.
+function pngGray(width, height, pixel) {
+  const crcTable = Array.from({ length: 256 }, (_, n) => {
+    let c = n;
+    for (let k = 0; k < 8; k++) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+    return c >>> 0;
+  });
+  const crc = (buf) => {
+    let c = 0xffffffff;
+    for (const b of buf) c = crcTable[(c ^ b) & 0xff] ^ (c >>> 8);
+    return (c ^ 0xffffffff) >>> 0;
+  };
+  const chunk = (type, data) => {
+    const body = Buffer.concat([Buffer.from(type, 'ascii'), data]);
+    const out = Buffer.alloc(12 + data.length);
+    out.writeUInt32BE(data.length, 0);
+    body.copy(out, 4);
+    out.writeUInt32BE(crc(body), 8 + data.length);
+    return out;
+  };
+  const raw = Buffer.alloc((width + 1) * height);
+  for (let y = 0; y < height; y++) for (let x = 0; x < width; x++) raw[y * (width + 1) + 1 + x] = pixel(x, y);
+  const ihdr = Buffer.alloc(13);
+  ihdr.writeUInt32BE(width, 0);
+  ihdr.writeUInt32BE(height, 4);
+  ihdr.set([8, 0, 0, 0, 0], 8);
+  return Buffer.concat([Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]), chunk('IHDR', ihdr),
+    chunk('IDAT', deflateSync(raw)), chunk('IEND', Buffer.alloc(0))]);
+}
+
+// An impossible scene: the glTF toy scene with every mask replaced by a thin ring (no
+// solid object's silhouette covers a ring without its hole).
+function ringFiles() {
+  const scene = JSON.parse(readFileSync(join(gltfScene, 'scene.json'), 'utf8'));
+  return folderFiles(gltfScene).map((f) => {
+    const v = scene.views.find((v) => v.mask === f.rel.split('\\').join('/'));
+    if (!v) return f;
+    const { width: w, height: h } = v.camera;
+    return { ...f, buffer: pngGray(w, h, (x, y) => (Math.abs(Math.hypot(x - w / 2, y - h / 2) - 40) < 3 ? 255 : 0)) };
+  });
+}
 
 // ---- server and browser ----------------------------------------------------------
 function startServer() {
@@ -89,7 +132,7 @@ async function waitLoaded(page) {
   if (await error.isVisible()) throw new Error(`the page shows an error: ${await error.textContent()}`);
 }
 
-// Clicks Start and waits for "converged"; returns the timings seen from outside.
+// Clicks Start and waits for the fit to end ("done — verdict …"); returns the timings seen from outside.
 async function fitToConvergence(page) {
   await page.evaluate(() => {
     window.__frames = 0;
@@ -103,7 +146,7 @@ async function fitToConvergence(page) {
   const t0 = Date.now();
   await byId(page, 'start').click();
   await page.waitForFunction(
-    () => document.querySelector('[data-testid=status]').textContent.includes('converged') ||
+    () => document.querySelector('[data-testid=status]').textContent.startsWith('done') ||
       !document.querySelector('[data-testid=error]').hidden,
     null,
     { timeout: CONVERGE_MS, polling: 20 },
@@ -171,7 +214,7 @@ async function drop(page, files) {
   await page.dispatchEvent('#drop', 'drop', { dataTransfer: dt });
 }
 
-test('examples: the chooser lists examples/index.json, the toy first; Load, Start, converged, IoU >= 0.95, result downloads', async () => {
+test('examples: the chooser lists examples/index.json, the toy first; Load, Start, verdict ok, IoU >= 0.95, result downloads; same pose and iterations as the CLI', async () => {
   const page = await openPage();
   const choice = byId(page, 'example-choice');
   await page.waitForFunction(() => document.querySelector('[data-testid=example-choice]').options.length > 0);
@@ -188,6 +231,18 @@ test('examples: the chooser lists examples/index.json, the toy first; Load, Star
   const values = await ious(page);
   assert.equal(values.length, 4);
   for (const v of values) assert.ok(v >= 0.95, `view IoU ${v} < 0.95 (all: ${values})`);
+  const verdict = byId(page, 'verdict');
+  assert.ok(await verdict.isVisible(), 'the verdict is shown');
+  assert.equal(await verdict.getAttribute('data-verdict'), 'ok', await verdict.textContent());
+  assert.match(t.status, /^done — verdict ok/);
+  // Each view shows its object window (256 px square) by default; the toggle shows the whole image.
+  const sizes = () => page.evaluate(() => [...document.querySelectorAll('.view canvas')].map((c) => [c.width, c.height]));
+  for (const [w, h] of await sizes()) assert.ok(w === 256 && h === 256, `window canvas ${w}×${h}`);
+  const scene = JSON.parse(readFileSync(join(toyDir, 'scene.json'), 'utf8'));
+  await byId(page, 'full-frame').check();
+  await page.waitForFunction((w) => [...document.querySelectorAll('.view canvas')].every((c) => c.width === w), scene.views[0].camera.width);
+  await byId(page, 'full-frame').uncheck();
+  await page.waitForFunction(() => [...document.querySelectorAll('.view canvas')].every((c) => c.width === 256));
   const shot = join(artifacts, 'converged.png');
   await page.screenshot({ path: shot, fullPage: true });
   assert.ok(statSync(shot).size > 20_000, 'the screenshot is suspiciously small');
@@ -212,6 +267,17 @@ test('examples: the chooser lists examples/index.json, the toy first; Load, Star
   assert.equal(result.pose.quaternion.length, 4);
   assert.equal(result.matrix.length, 4);
   assert.ok(result.errors && result.errors.rotation_deg < 5, `rotation error ${result.errors?.rotation_deg}°`);
+  assert.equal(result.verdict, 'ok');
+  // One default for every front end: the command line fits the same example to the same
+  // pose in the same number of iterations.
+  const nativePath = join(artifacts, 'toy-native.json');
+  execFileSync(cli, ['fit', join(toyDir, 'scene.json'), '--out', nativePath], { stdio: ['ignore', 'ignore', 'inherit'] });
+  const native = JSON.parse(readFileSync(nativePath, 'utf8'));
+  assert.equal(result.iterations, native.iterations, 'the page and the CLI do the same number of iterations');
+  for (const k of ['translation', 'scale', 'quaternion']) {
+    result.pose[k].forEach((v, i) => assert.ok(Math.abs(v - native.pose[k][i]) < 1e-6, `pose.${k}: page ${result.pose[k]} vs CLI ${native.pose[k]}`));
+  }
+  assert.ok(Math.abs(result.errors.rotation_deg - native.errors.rotation_deg) < 1e-3, 'the same error figures');
   assert.deepEqual(page.problems, []);
   console.log(`  status: ${t.status}`);
   console.log(`  benchmark: converged from no initial pose in ${t.wall.toFixed(2)} s wall (target < 3 s)`);
@@ -337,6 +403,21 @@ test('errors: a malformed .glb, alone or named by a scene, shows a specific erro
   await byId(page, 'load-example').click();
   await waitLoaded(page);
   assert.ok(await error.isHidden());
+  await page.context().close();
+});
+
+test('verdict: an impossible scene (ring masks) ends with verdict failed, shown on the page, never "converged"', async () => {
+  const page = await openPage();
+  await upload(page, ringFiles());
+  await waitLoaded(page);
+  const t = await fitToConvergence(page);
+  assert.match(t.status, /^done — verdict failed/, t.status);
+  assert.ok(!t.status.includes('converged'), t.status);
+  const verdict = byId(page, 'verdict');
+  assert.equal(await verdict.getAttribute('data-verdict'), 'failed');
+  assert.match(await verdict.textContent(), /failed/);
+  assert.deepEqual(page.problems, []);
+  console.log(`  status: ${t.status}`);
   await page.context().close();
 });
 

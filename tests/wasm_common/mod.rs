@@ -52,6 +52,7 @@ fn toy_example() -> Files {
         ));
         images.push((format!("example/images/{}.png", v.name()), encode_rgba(&s.images[i])));
         views.push(ViewJson {
+            ignore: None,
             name: v.name().to_string(),
             image: Some(format!("images/{}.png", v.name())),
             mask: format!("masks/{}.png", v.name()),
@@ -294,9 +295,9 @@ fn dropped_files_make_a_session_whatever_they_are() {
     let from_folder = Session::from_files(&file_set(&ex, false)).unwrap();
     for (a, b) in session.estimator().views().iter().zip(from_folder.estimator().views()) {
         assert!(
-            a.mask == b.mask && a.image == b.image,
+            a.mask() == b.mask() && a.image() == b.image(),
             "view {}: mask and image told apart",
-            a.name
+            a.name()
         );
     }
     // A mesh alone: checked, then reported as lacking a scene.
@@ -381,7 +382,7 @@ fn a_session_built_view_by_view_matches_the_scene() {
             b.add_view(name, camera, mask, Some(image)).unwrap();
         } else {
             // RGBA pixels, as from ImageData: the mask in alpha.
-            let m = &from_scene.views[i].mask;
+            let m = from_scene.views[i].mask();
             let rgba: Vec<u8> = m.data.iter().flat_map(|&o| [9, 9, 9, o * 255]).collect();
             b.add_view_rgba(name, camera, m.width, m.height, rgba, None).unwrap();
         }
@@ -391,8 +392,8 @@ fn a_session_built_view_by_view_matches_the_scene() {
     let mut session = b.build().unwrap();
     assert_eq!(session.view_count(), 4);
     for (v, w) in session.estimator().views().iter().zip(&from_scene.views) {
-        assert!(v.mask() == w.mask, "view {}: the same mask", v.name());
-        assert_eq!(v.camera(), w.camera);
+        assert!(v.mask() == w.mask(), "view {}: the same mask", v.name());
+        assert_eq!(v.camera(), w.camera());
     }
     let p = session.step(3).unwrap();
     assert_eq!(js_get(&p, "phase").as_string().unwrap(), "search");
