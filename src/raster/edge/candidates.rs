@@ -115,7 +115,9 @@ impl EdgeSilhouette {
         self.edges.clear();
         self.outline = 0;
         for (e, &[ia, ib]) in topo.ends.iter().enumerate() {
-            // Faces left of a → b ((b − a) × (c − a) > 0) count as positive.
+            // The side of face (a, b, c) is the sign of (b − a) × (c − a), c its third
+            // vertex: its area's sign when it runs a → b, the opposite when b → a.
+            // Faces left of a → b count as positive.
             let (mut left, mut right) = (false, false);
             for inc in topo.incidences(e) {
                 let s = self.face_sign[inc.face as usize];
