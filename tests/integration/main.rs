@@ -2,6 +2,7 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 mod cli;
+mod edge_raster;
 mod estimator;
 mod grasps;
 mod hard_raster;

@@ -1,0 +1,788 @@
+//! Silhouette-edge soft rasteriser (`raster::edge`): the tiled kernel against a naive
+//! per-pixel oracle over all edges (adjacency built independently, with hash maps),
+//! its gradient records against central differences (2-D and through the pose), the
+//! σ → 0 limit, the closed-form soft values of a square, and hidden contours.
+
+use crate::hard_raster::{cube, duck};
+use glam::{DVec2, DVec3};
+use localisebot::raster::edge::{EdgeRecord, EdgeSilhouette, EdgeTopology, WELD_TOLERANCE};
+use localisebot::raster::hard;
+use localisebot::raster::project::{project_mesh, Projected};
+use localisebot::raster::soft::{SoftSettings, DEGENERATE_DOUBLE_AREA};
+use localisebot::synth::blob_mesh;
+use localisebot::{so3, Camera, Mask, Mesh, Pose};
+use std::collections::HashMap;
+
+// ---------------------------------------------------------------- the naive oracle
+
+/// A candidate outline edge as the oracle sees it.
+struct Candidate {
+    a: u32,
+    b: u32,
+    pa: DVec2,
+    pb: DVec2,
+    out: DVec2,
+}
+
+/// What the oracle computes.
+struct Oracle {
+    alpha: Vec<f64>,
+    records: Vec<EdgeRecord>,
+    coverage: Mask,
+    candidates: Vec<Candidate>,
+}
+
+fn sigmoid(x: f64) -> f64 {
+    1.0 / (1.0 + (-x).exp())
+}
+
+/// The definition of the module doc, literally: weld with a hash map over grid keys,
+/// adjacency with a hash map over welded pairs, then every pixel against every
+/// candidate.
+fn oracle(positions: &[DVec3], tris: &[[u32; 3]], proj: &Projected, cam: &Camera, s: &SoftSettings) -> Oracle {
+    // Weld: grid step WELD_TOLERANCE × box diagonal, from the box's minimum corner;
+    // each vertex represented by the smallest index with its key.
+    let lo = positions.iter().fold(DVec3::INFINITY, |m, p| m.min(*p));
+    let hi = positions.iter().fold(DVec3::NEG_INFINITY, |m, p| m.max(*p));
+    let step = (hi - lo).length() * WELD_TOLERANCE;
+    let key = |p: DVec3| {
+        let g = ((p - lo) / step).round();
+        (g.x as i64, g.y as i64, g.z as i64)
+    };
+    let mut first: HashMap<(i64, i64, i64), u32> = HashMap::new();
+    for (i, p) in positions.iter().enumerate() {
+        first.entry(key(*p)).or_insert(i as u32);
+    }
+    let rep: Vec<u32> = positions.iter().map(|p| first[&key(*p)]).collect();
+    // Adjacency: welded pair → (face, third vertex).
+    let mut adj: HashMap<(u32, u32), Vec<(usize, u32)>> = HashMap::new();
+    for (f, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (u, v) = (rep[t[k] as usize], rep[t[(k + 1) % 3] as usize]);
+            if u != v {
+                adj.entry((u.min(v), u.max(v))).or_default().push((f, t[(k + 2) % 3]));
+            }
+        }
+    }
+    let uv = &proj.uv;
+    let present = |f: usize| {
+        let [a, b, c] = tris[f].map(|i| i as usize);
+        [a, b, c].iter().all(|&i| proj.cam[i].z >= proj.near)
+            && (uv[b] - uv[a]).perp_dot(uv[c] - uv[a]).abs() > DEGENERATE_DOUBLE_AREA
+    };
+    let mut keys: Vec<(u32, u32)> = adj.keys().copied().collect();
+    keys.sort();
+    let mut candidates = Vec::new();
+    for (a, b) in keys {
+        let (pa, pb) = (uv[a as usize], uv[b as usize]);
+        let sides: Vec<f64> = adj[&(a, b)]
+            .iter()
+            .filter(|(f, _)| present(*f))
+            .map(|(_, c)| (pb - pa).perp_dot(uv[*c as usize] - pa).signum())
+            .collect();
+        if sides.is_empty() || sides.iter().any(|&x| x != sides[0]) {
+            continue;
+        }
+        let d = pb - pa;
+        let left = DVec2::new(-d.y, d.x) / d.length();
+        candidates.push(Candidate {
+            a,
+            b,
+            pa,
+            pb,
+            out: -sides[0] * left,
+        });
+    }
+    let coverage = hard::render_projected(proj, tris, cam);
+    let (w, h) = (cam.width as i64, cam.height as i64);
+    let c_at = |x: i64, y: i64| x >= 0 && y >= 0 && x < w && y < h && coverage.data[(y * w + x) as usize] != 0;
+    let m2 = s.cutoff_sq();
+    let mut alpha = Vec::new();
+    let mut records = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let p = DVec2::new(x as f64, y as f64);
+            let inside = c_at(x, y);
+            let mut best: Option<(f64, f64, DVec2, &Candidate)> = None;
+            for e in &candidates {
+                let d = e.pb - e.pa;
+                let t = ((p - e.pa).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+                let q = if t == 0.0 {
+                    e.pa
+                } else if t == 1.0 {
+                    e.pb
+                } else {
+                    e.pa + d * t
+                };
+                let d2 = (p - q).length_squared();
+                let r = q + e.out;
+                let accepted = !c_at((r.x + 0.5).floor() as i64, (r.y + 0.5).floor() as i64);
+                if d2 < m2 && accepted && best.as_ref().is_none_or(|b| d2 < b.0) {
+                    best = Some((d2, t, q, e));
+                }
+            }
+            let Some((d2, t, q, e)) = best else {
+                alpha.push(f64::from(u8::from(inside)));
+                continue;
+            };
+            let delta = if inside { 1.0 } else { -1.0 };
+            let a = sigmoid(delta * d2 / s.sigma);
+            alpha.push(a);
+            let da = delta * a * (1.0 - a) / s.sigma;
+            records.push(EdgeRecord {
+                px: (y * w + x) as u32,
+                a: e.a,
+                b: e.b,
+                ga: (p - q) * (-2.0 * (1.0 - t) * da),
+                gb: (p - q) * (-2.0 * t * da),
+            });
+        }
+    }
+    Oracle {
+        alpha,
+        records,
+        coverage,
+        candidates,
+    }
+}
+
+// ---------------------------------------------------------------- helpers
+
+fn render(mesh: &Mesh, proj: &Projected, cam: &Camera, s: &SoftSettings) -> EdgeSilhouette {
+    let topo = EdgeTopology::from_mesh(mesh);
+    let mut sil = EdgeSilhouette::new();
+    sil.render(&topo, proj, &mesh.triangles, cam, s).unwrap();
+    sil
+}
+
+/// Records match when they name the same pixels, in increasing order, and give each
+/// pixel the same vertex gradients to 1e-12. The edge named may differ where two edges
+/// are equally near (a pixel nearest to the vertex they share, where both give all of
+/// the gradient to that vertex): rounding decides the tie differently in the two.
+fn assert_records_match(label: &str, got: &[EdgeRecord], want: &[EdgeRecord]) {
+    assert!(
+        got.windows(2).all(|r| r[0].px < r[1].px),
+        "{label}: records out of order"
+    );
+    assert_eq!(got.len(), want.len(), "{label}: record count");
+    let mut relabelled = 0;
+    for (g, w) in got.iter().zip(want) {
+        assert_eq!(g.px, w.px, "{label}: record {g:?} vs {w:?}");
+        let tol = 1e-12 * (1.0 + w.ga.length() + w.gb.length());
+        if (g.a, g.b) == (w.a, w.b) {
+            assert!(
+                (g.ga - w.ga).length() <= tol && (g.gb - w.gb).length() <= tol,
+                "{label}: gradient {g:?} vs {w:?}"
+            );
+            continue;
+        }
+        relabelled += 1;
+        // Per-vertex gradients, dropping vanishing ones.
+        let per_vertex = |r: &EdgeRecord| {
+            let mut v: Vec<(u32, DVec2)> = vec![(r.a, r.ga), (r.b, r.gb)];
+            v.retain(|(_, g)| g.length() > tol);
+            v.sort_by_key(|(i, _)| *i);
+            v
+        };
+        let (pg, pw) = (per_vertex(g), per_vertex(w));
+        assert_eq!(pg.len(), pw.len(), "{label}: {g:?} vs {w:?}");
+        for ((ig, gg), (iw, gw)) in pg.iter().zip(&pw) {
+            assert!(ig == iw && (*gg - *gw).length() <= tol, "{label}: {g:?} vs {w:?}");
+        }
+    }
+    assert!(
+        relabelled * 20 <= got.len().max(20),
+        "{label}: {relabelled} ties of {}",
+        got.len()
+    );
+}
+
+/// Renders with the kernel and the oracle and compares everything; returns the
+/// kernel's silhouette and the oracle for further checks.
+fn check(label: &str, mesh: &Mesh, proj: &Projected, cam: &Camera, s: &SoftSettings) -> (EdgeSilhouette, Oracle) {
+    let sil = render(mesh, proj, cam, s);
+    let o = oracle(&mesh.positions, &mesh.triangles, proj, cam, s);
+    assert_eq!(sil.coverage(), &o.coverage, "{label}: coverage");
+    assert_eq!(sil.outline_edges(), o.candidates.len(), "{label}: candidate count");
+    let worst = sil
+        .alpha()
+        .iter()
+        .zip(&o.alpha)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(worst <= 1e-12, "{label}: alpha differs by {worst}");
+    assert_records_match(label, sil.records(), &o.records);
+    assert!(
+        !o.records.is_empty(),
+        "{label}: nothing soft: the scene misses the canvas"
+    );
+    (sil, o)
+}
+
+fn look(mesh: &Mesh, dir: DVec3, dist: f64, w: u32, h: u32, f: f64) -> Camera {
+    let b = mesh.bounds().unwrap();
+    let c = b.centre();
+    let r = b.size().length() * 0.5;
+    Camera::look_at(c + dir.normalize() * r * dist, c, DVec3::Y, w, h, f)
+}
+
+fn some_pose() -> Pose {
+    Pose {
+        rotation: so3::exp(DVec3::new(0.3, -0.5, 0.2)),
+        translation: DVec3::new(0.05, -0.02, 0.1),
+        scale: DVec3::new(1.0, 0.8, 1.2),
+    }
+}
+
+/// A `(n+1)²`-vertex height field over [−1, 1]², an open mesh.
+fn height_field(n: usize) -> Mesh {
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f64 / n as f64 * 2.0 - 1.0, j as f64 / n as f64 * 2.0 - 1.0);
+            positions.push(DVec3::new(x, y, 0.3 * (2.0 * x).sin() * (1.5 * y).cos()));
+        }
+    }
+    let v = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut triangles = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+            triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    Mesh { positions, triangles }
+}
+
+/// The mesh with every vertex of every other triangle replaced by a fresh copy
+/// appended after the originals (so the smallest index of each position is the
+/// original one), as glTF stores UV and normal seams.
+fn with_seams(mesh: &Mesh) -> Mesh {
+    let mut positions = mesh.positions.clone();
+    let mut triangles = Vec::new();
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        if f % 2 == 0 {
+            triangles.push(*t);
+        } else {
+            triangles.push(t.map(|i| {
+                positions.push(mesh.positions[i as usize]);
+                positions.len() as u32 - 1
+            }));
+        }
+    }
+    Mesh { positions, triangles }
+}
+
+/// A box of half-size `h` centred at `c`, 12 triangles.
+fn boxed(c: DVec3, h: DVec3) -> Mesh {
+    let mut m = cube();
+    for p in &mut m.positions {
+        *p = c + *p * h;
+    }
+    m
+}
+
+fn concat(a: &Mesh, b: &Mesh) -> Mesh {
+    let n = a.positions.len() as u32;
+    Mesh {
+        positions: a.positions.iter().chain(&b.positions).copied().collect(),
+        triangles: a
+            .triangles
+            .iter()
+            .copied()
+            .chain(b.triangles.iter().map(|t| t.map(|i| i + n)))
+            .collect(),
+    }
+}
+
+/// A flat "projection": pixel positions as given, every vertex in front.
+fn flat(uv: &[DVec2]) -> (Mesh, Projected) {
+    let mesh = Mesh {
+        positions: uv.iter().map(|p| p.extend(0.0)).collect(),
+        triangles: Vec::new(),
+    };
+    let proj = Projected {
+        cam: vec![DVec3::Z; uv.len()],
+        uv: uv.to_vec(),
+        near: 1e-3,
+    };
+    (mesh, proj)
+}
+
+/// A camera used only for its canvas size (every vertex of a flat projection is in front).
+fn canvas(w: u32, h: u32) -> Camera {
+    Camera::look_at(DVec3::new(0.0, 0.0, -1.0), DVec3::ZERO, DVec3::Y, w, h, 10.0)
+}
+
+fn settings(sigma: f64) -> SoftSettings {
+    SoftSettings { sigma, eps: 1e-4 }
+}
+
+// ---------------------------------------------------------------- forward vs oracle
+
+#[test]
+fn edge_matches_oracle_on_the_blob() {
+    let mesh = blob_mesh(22, 50);
+    for (dir, sigma) in [(DVec3::new(0.3, -0.4, 2.5), 0.4096), (DVec3::new(-1.0, 0.7, 0.2), 2.0)] {
+        let cam = look(&mesh, dir, 3.0, 128, 128, 150.0);
+        let proj = project_mesh(&mesh, &some_pose(), &cam);
+        check("blob", &mesh, &proj, &cam, &settings(sigma));
+    }
+}
+
+#[test]
+fn edge_matches_oracle_on_the_duck() {
+    let mesh = duck();
+    for (k, dir) in [DVec3::new(1.0, 0.5, 1.0), DVec3::new(-0.7, -0.4, -1.0)]
+        .into_iter()
+        .enumerate()
+    {
+        let cam = look(&mesh, dir, 3.5, 128, 128, 150.0);
+        let proj = project_mesh(&mesh, &Pose::IDENTITY, &cam);
+        let (sil, _) = check(&format!("duck view {k}"), &mesh, &proj, &cam, &settings(0.4096));
+        // The Duck's seams: far fewer welded vertices than stored ones.
+        let topo = EdgeTopology::from_mesh(&mesh);
+        assert!(topo.welded_vertex_count() < mesh.positions.len());
+        assert!(sil.outline_edges() < topo.edge_count() / 4);
+    }
+}
+
+#[test]
+fn edge_matches_oracle_on_a_cube_an_open_mesh_and_across_the_border() {
+    let c = cube();
+    let cam = look(&c, DVec3::new(0.6, 0.8, 1.7), 3.0, 64, 56, 60.0);
+    check("cube", &c, &project_mesh(&c, &some_pose(), &cam), &cam, &settings(1.0));
+    let hf = height_field(7);
+    let cam = look(&hf, DVec3::new(0.4, -0.9, 1.5), 2.5, 64, 64, 70.0);
+    check(
+        "height field",
+        &hf,
+        &project_mesh(&hf, &some_pose(), &cam),
+        &cam,
+        &settings(1.5),
+    );
+    // The blob close up: its silhouette leaves the canvas on every side.
+    let blob = blob_mesh(12, 24);
+    let cam = look(&blob, DVec3::new(0.2, 0.1, 1.0), 1.4, 40, 36, 60.0);
+    let proj = project_mesh(&blob, &Pose::IDENTITY, &cam);
+    let (sil, o) = check("blob across the border", &blob, &proj, &cam, &settings(1.0));
+    assert!(o
+        .candidates
+        .iter()
+        .any(|e| e.pa.x < 0.0 || e.pa.y < 0.0 || e.pa.x > 39.0 || e.pa.y > 35.0));
+    let row0 = &sil.coverage().data[..40];
+    assert!(row0.contains(&1), "the silhouette should reach the canvas' top row");
+}
+
+#[test]
+fn edge_matches_oracle_on_non_manifold_edges() {
+    // Three triangles share the edge (20, 12)–(20, 40). Mixed sides: the shared edge
+    // is no outline; all on one side: it is.
+    for (thirds, shared_is_outline) in [
+        (
+            [DVec2::new(33.4, 25.1), DVec2::new(7.3, 22.8), DVec2::new(30.2, 41.7)],
+            false,
+        ),
+        (
+            [DVec2::new(33.4, 25.1), DVec2::new(26.9, 14.2), DVec2::new(30.2, 41.7)],
+            true,
+        ),
+    ] {
+        let mut uv = vec![DVec2::new(20.0, 12.0), DVec2::new(20.0, 40.0)];
+        uv.extend(thirds);
+        let (mut mesh, proj) = flat(&uv);
+        mesh.triangles = vec![[0, 1, 2], [1, 0, 3], [0, 4, 1]];
+        let cam = canvas(48, 52);
+        let (_, o) = check("non-manifold", &mesh, &proj, &cam, &settings(1.0));
+        assert_eq!(o.candidates.iter().any(|e| (e.a, e.b) == (0, 1)), shared_is_outline);
+        let topo = EdgeTopology::from_mesh(&mesh);
+        assert_eq!(topo.edge_count(), 7);
+    }
+}
+
+#[test]
+fn edge_welds_seams_to_the_welded_result() {
+    for (label, mesh) in [("blob", blob_mesh(14, 30)), ("duck", duck())] {
+        let seams = with_seams(&mesh);
+        let cam = look(&mesh, DVec3::new(0.5, 0.6, 1.0), 3.0, 96, 96, 110.0);
+        let pose = some_pose();
+        let a = render(&mesh, &project_mesh(&mesh, &pose, &cam), &cam, &settings(0.8));
+        let proj = project_mesh(&seams, &pose, &cam);
+        let (b, _) = check(&format!("{label} with seams"), &seams, &proj, &cam, &settings(0.8));
+        assert_eq!(a.coverage(), b.coverage(), "{label}");
+        assert_eq!(a.outline_edges(), b.outline_edges(), "{label}");
+        assert!(
+            a.alpha().iter().zip(b.alpha()).all(|(x, y)| (x - y).abs() <= 1e-12),
+            "{label}"
+        );
+        assert_records_match(label, b.records(), a.records());
+    }
+}
+
+#[test]
+fn edge_vertices_behind_the_camera_drop_their_faces() {
+    // A camera above the middle of a height field, looking along it: the near half is
+    // behind the camera, the hard coverage clips it, its faces are not present.
+    let mesh = height_field(12);
+    let cam = Camera::look_at(
+        DVec3::new(0.1, -0.2, 0.8),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::Z,
+        64,
+        48,
+        40.0,
+    );
+    let proj = project_mesh(&mesh, &Pose::IDENTITY, &cam);
+    assert!(proj.cam.iter().any(|c| c.z < proj.near) && proj.cam.iter().any(|c| c.z > proj.near));
+    check("height field behind the camera", &mesh, &proj, &cam, &settings(1.0));
+}
+
+#[test]
+fn edge_hidden_contours_do_not_soften_the_interior() {
+    let big = boxed(DVec3::ZERO, DVec3::new(1.0, 0.8, 0.6));
+    let small = boxed(DVec3::new(0.1, -0.05, 1.2), DVec3::new(0.25, 0.2, 0.2));
+    let both = concat(&big, &small);
+    let cam = Camera::look_at(DVec3::new(0.4, 0.3, 6.0), DVec3::ZERO, DVec3::Y, 128, 112, 200.0);
+    let pose = Pose {
+        rotation: so3::exp(DVec3::new(0.05, -0.1, 0.3)),
+        ..Pose::IDENTITY
+    };
+    let s = settings(1.0);
+    let alone = render(&big, &project_mesh(&big, &pose, &cam), &cam, &s);
+    let (sil, o) = check("boxes", &both, &project_mesh(&both, &pose, &cam), &cam, &s);
+    // The small box's contours are candidates, lie well inside the big silhouette, and
+    // are all rejected: the render is the big box's alone.
+    assert!(sil.outline_edges() > alone.outline_edges());
+    let small_edges: Vec<&Candidate> = o.candidates.iter().filter(|e| e.a >= 8).collect();
+    assert!(small_edges.len() >= 4);
+    assert!(small_edges.iter().all(|e| {
+        let mid = ((e.pa + e.pb) * 0.5).round();
+        sil.coverage().get(mid.x as u32, mid.y as u32)
+    }));
+    assert_eq!(sil.coverage(), alone.coverage());
+    assert!(sil
+        .alpha()
+        .iter()
+        .zip(alone.alpha())
+        .all(|(a, b)| (a - b).abs() <= 1e-12));
+    assert!(sil.records().iter().all(|r| r.a < 8 && r.b < 8));
+    assert!(sil.alpha().iter().filter(|&&a| a == 1.0).count() > 1000);
+}
+
+// ---------------------------------------------------------------- limits and closed forms
+
+#[test]
+fn edge_tiny_sigma_gives_the_hard_raster() {
+    for mesh in [blob_mesh(22, 50), duck()] {
+        let cam = look(&mesh, DVec3::new(0.3, 0.2, 1.0), 3.0, 128, 128, 150.0);
+        let proj = project_mesh(&mesh, &some_pose(), &cam);
+        let sil = render(&mesh, &proj, &cam, &settings(1e-6));
+        let hard = hard::render_projected(&proj, &mesh.triangles, &cam);
+        // Pixels within 1e-2 px of any projected edge are excluded.
+        let (w, h) = (cam.width as usize, cam.height as usize);
+        let mut near_edge = vec![false; w * h];
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                let (a, b) = (proj.uv[t[k] as usize], proj.uv[t[(k + 1) % 3] as usize]);
+                let lo = (a.min(b) - 0.01).ceil().max(DVec2::ZERO);
+                let hi = (a.max(b) + 0.01)
+                    .floor()
+                    .min(DVec2::new(w as f64 - 1.0, h as f64 - 1.0));
+                for y in lo.y as i64..=hi.y as i64 {
+                    for x in lo.x as i64..=hi.x as i64 {
+                        let p = DVec2::new(x as f64, y as f64);
+                        let d = b - a;
+                        let t = ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+                        if (p - (a + d * t)).length() <= 0.01 {
+                            near_edge[y as usize * w + x as usize] = true;
+                        }
+                    }
+                }
+            }
+        }
+        let mut checked = 0;
+        for (i, (a, c)) in sil.alpha().iter().zip(&hard.data).enumerate() {
+            if !near_edge[i] {
+                assert_eq!(*a, f64::from(*c), "pixel {i}");
+                checked += 1;
+            }
+        }
+        assert!(checked > w * h * 9 / 10 && hard.area() > 1000, "{checked}");
+    }
+}
+
+#[test]
+fn edge_square_follows_the_sigmoid_of_the_squared_distance() {
+    let (x0, x1, y0, y1) = (10.3, 100.7, 12.6, 90.2);
+    let uv = [
+        DVec2::new(x0, y0),
+        DVec2::new(x1, y0),
+        DVec2::new(x1, y1),
+        DVec2::new(x0, y1),
+    ];
+    let (mut mesh, proj) = flat(&uv);
+    mesh.triangles = vec![[0, 1, 2], [0, 2, 3]];
+    let cam = canvas(128, 112);
+    for sigma in [0.5, 2.0] {
+        let s = settings(sigma);
+        let m = s.cutoff_sq().sqrt();
+        let sil = render(&mesh, &proj, &cam, &s);
+        assert_eq!(sil.outline_edges(), 4);
+        let mut soft = 0;
+        // A row crossing the left and right edges, a column crossing the top and bottom.
+        for x in 0..128usize {
+            let inside = x as f64 > x0 && (x as f64) < x1;
+            let d = (x as f64 - x0).abs().min((x as f64 - x1).abs());
+            let want = match (d < m, inside) {
+                (true, true) => 1.0 / (1.0 + (-d * d / sigma).exp()),
+                (true, false) => 1.0 / (1.0 + (d * d / sigma).exp()),
+                (false, c) => f64::from(u8::from(c)),
+            };
+            soft += usize::from(d < m);
+            let got = sil.alpha()[50 * 128 + x];
+            assert!((got - want).abs() < 1e-14, "σ {sigma} x {x}: {got} vs {want}");
+        }
+        for y in 0..112usize {
+            let inside = y as f64 > y0 && (y as f64) < y1;
+            let d = (y as f64 - y0).abs().min((y as f64 - y1).abs());
+            let want = if d < m {
+                1.0 / (1.0 + (if inside { -1.0 } else { 1.0 } * d * d / sigma).exp())
+            } else {
+                f64::from(u8::from(inside))
+            };
+            let got = sil.alpha()[y * 128 + 60];
+            assert!((got - want).abs() < 1e-14, "σ {sigma} y {y}: {got} vs {want}");
+        }
+        assert!(soft >= 4);
+        // Moving the left edge right by ξ lowers A at (x, 50) near it:
+        // ∂A/∂ξ = −∂A/∂x, the sum of the two left vertices' u-gradients.
+        for x in 9..13usize {
+            let i = (50 * 128 + x) as u32;
+            let r = sil.records().iter().find(|r| r.px == i).unwrap();
+            assert_eq!((r.a.min(r.b), r.a.max(r.b)), (0, 3));
+            let d = x as f64 - x0;
+            let a = sil.alpha()[i as usize];
+            let want = -(a * (1.0 - a) / sigma) * 2.0 * d.abs();
+            assert!(((r.ga.x + r.gb.x) - want).abs() < 1e-12, "x {x}");
+            assert!((r.ga.y + r.gb.y).abs() < 1e-12);
+        }
+    }
+}
+
+// ---------------------------------------------------------------- gradients vs central differences
+
+/// Deterministic pseudo-random numbers in [−1, 1].
+fn noise(n: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    (0..n)
+        .map(|_| {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        })
+        .collect()
+}
+
+/// Smallest distance from a pixel centre to a candidate outline segment.
+fn margin(o: &Oracle, w: u32, h: u32) -> f64 {
+    let mut best = f64::INFINITY;
+    for e in &o.candidates {
+        let lo = (e.pa.min(e.pb) - 1.0).ceil().max(DVec2::ZERO);
+        let hi = (e.pa.max(e.pb) + 1.0)
+            .floor()
+            .min(DVec2::new(w as f64 - 1.0, h as f64 - 1.0));
+        for y in lo.y as i64..=hi.y as i64 {
+            for x in lo.x as i64..=hi.x as i64 {
+                let p = DVec2::new(x as f64, y as f64);
+                let d = e.pb - e.pa;
+                let t = ((p - e.pa).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+                best = best.min((p - (e.pa + d * t)).length());
+            }
+        }
+    }
+    best
+}
+
+/// The structure the finite differences must not change: the coverage, and per soft
+/// pixel the vertices its gradient reaches (the edge named may switch between two whose
+/// closest point is the vertex they share: the same function there).
+fn structure(sil: &EdgeSilhouette) -> (Mask, Vec<(u32, Vec<u32>)>) {
+    let reached = |r: &EdgeRecord| {
+        let mut v: Vec<u32> = [(r.a, r.ga), (r.b, r.gb)]
+            .iter()
+            .filter(|(_, g)| *g != DVec2::ZERO)
+            .map(|(i, _)| *i)
+            .collect();
+        v.sort();
+        v
+    };
+    (
+        sil.coverage().clone(),
+        sil.records().iter().map(|r| (r.px, reached(r))).collect(),
+    )
+}
+
+/// ∂(Σ w·A)/∂uv against central differences, moving every copy of a vertex together.
+///
+/// Configurations: the whole projection is shifted by pseudo-random sub-pixel offsets
+/// until no pixel centre lies within 1e-3 px of a candidate outline segment (the hard
+/// coverage, snapped to 1/1024 px, then cannot change under a 1e-6 px step); ε = 1e-15
+/// makes the cut-off's jump negligible. Each ±h render must then have the base's
+/// coverage and pixel-to-edge assignment (asserted), so the function is smooth there.
+#[allow(clippy::needless_range_loop)] // `axis` indexes DVec2 components
+fn fd_2d(label: &str, mesh: &Mesh, base: &Projected, cam: &Camera, sigma: f64) {
+    let s = SoftSettings { sigma, eps: 1e-15 };
+    let topo = EdgeTopology::from_mesh(mesh);
+    let (w, h) = (cam.width, cam.height);
+    let weights = noise(w as usize * h as usize, 7);
+    let offsets = noise(40, 3);
+    let mut proj = base.clone();
+    let mut found = false;
+    for k in 0..20 {
+        let shift = DVec2::new(offsets[2 * k], offsets[2 * k + 1]) * 0.5;
+        proj.uv = base.uv.iter().map(|p| *p + shift).collect();
+        if margin(&oracle(&mesh.positions, &mesh.triangles, &proj, cam, &s), w, h) >= 1e-3 {
+            found = true;
+            break;
+        }
+    }
+    assert!(
+        found,
+        "{label}: no configuration without a pixel centre near the outline"
+    );
+    let mut sil = EdgeSilhouette::new();
+    sil.render(&topo, &proj, &mesh.triangles, cam, &s).unwrap();
+    let base_structure = structure(&sil);
+    let base_alpha = sil.alpha().to_vec();
+    let mut grad = Vec::new();
+    sil.backward_2d(&weights, &mut grad);
+    // Vertices to test: spread over the outline, and one on no outline edge.
+    let mut on_outline: Vec<u32> = sil.records().iter().flat_map(|r| [r.a, r.b]).collect();
+    on_outline.sort();
+    on_outline.dedup();
+    assert!(on_outline.len() >= 6, "{label}");
+    let mut chosen: Vec<u32> = (0..6).map(|i| on_outline[i * on_outline.len() / 6]).collect();
+    let outline_pos: Vec<DVec3> = on_outline.iter().map(|&v| mesh.positions[v as usize]).collect();
+    chosen.extend((0..mesh.positions.len() as u32).find(|&v| !outline_pos.contains(&mesh.positions[v as usize])));
+    let hstep = 1e-6;
+    let (mut analytic, mut numeric) = (Vec::new(), Vec::new());
+    for &v in &chosen {
+        let copies: Vec<usize> = (0..mesh.positions.len())
+            .filter(|&i| mesh.positions[i] == mesh.positions[v as usize])
+            .collect();
+        for axis in 0..2 {
+            let mut sum = [0.0; 2];
+            for (j, sign) in [1.0, -1.0].into_iter().enumerate() {
+                let mut p = proj.clone();
+                for &c in &copies {
+                    p.uv[c][axis] += sign * hstep;
+                }
+                sil.render(&topo, &p, &mesh.triangles, cam, &s).unwrap();
+                assert!(
+                    structure(&sil) == base_structure,
+                    "{label}: vertex {v} axis {axis} changes the structure"
+                );
+                sum[j] = sil
+                    .alpha()
+                    .iter()
+                    .zip(&base_alpha)
+                    .zip(&weights)
+                    .map(|((a, b), w)| (a - b) * w)
+                    .sum();
+            }
+            numeric.push((sum[0] - sum[1]) / (2.0 * hstep));
+            analytic.push(copies.iter().map(|&c| grad[c][axis]).sum::<f64>());
+        }
+    }
+    let scale = analytic.iter().fold(0.0f64, |m, g| m.max(g.abs()));
+    let err = analytic
+        .iter()
+        .zip(&numeric)
+        .fold(0.0f64, |m, (a, n)| m.max((a - n).abs()));
+    assert!(scale > 1e-3, "{label}: no gradient");
+    assert!(
+        err <= 1e-6 * scale,
+        "{label}: error {err} of {scale}\n{analytic:?}\n{numeric:?}"
+    );
+    // The vertex on no outline edge has no gradient, analytically or numerically.
+    assert_eq!(analytic[analytic.len() - 2..], [0.0, 0.0]);
+    assert!(numeric[numeric.len() - 2..].iter().all(|n| n.abs() < 1e-6 * scale));
+}
+
+#[test]
+fn edge_gradient_2d_matches_central_differences() {
+    let blob = blob_mesh(14, 30);
+    let cam = look(&blob, DVec3::new(0.3, -0.4, 2.5), 3.0, 64, 64, 75.0);
+    fd_2d("blob", &blob, &project_mesh(&blob, &some_pose(), &cam), &cam, 1.0);
+    let d = duck();
+    let cam = look(&d, DVec3::new(1.0, 0.5, 1.0), 3.5, 128, 128, 150.0);
+    fd_2d("duck", &d, &project_mesh(&d, &Pose::IDENTITY, &cam), &cam, 0.4096);
+    let hf = height_field(5);
+    let cam = look(&hf, DVec3::new(0.4, -0.9, 1.5), 2.5, 64, 64, 70.0);
+    fd_2d("height field", &hf, &project_mesh(&hf, &some_pose(), &cam), &cam, 2.0);
+}
+
+#[test]
+fn edge_gradient_through_the_pose_matches_central_differences() {
+    // ∂(Σ w·A)/∂t for the translation t, chained by hand: X_c = R_c(R·sX + t) + t_c,
+    // so ∂L/∂t = R_cᵀ Σ_v J_vᵀ ∂L/∂uv_v (J_v the projection Jacobian at X_c of v). The
+    // gradient sits on one copy of each welded vertex, yet every copy moves: this
+    // checks that any copy serves.
+    let mesh = duck();
+    let topo = EdgeTopology::from_mesh(&mesh);
+    let cam = look(&mesh, DVec3::new(-1.0, 0.6, 0.8), 3.5, 96, 96, 110.0);
+    let s = SoftSettings { sigma: 0.6, eps: 1e-15 };
+    let weights = noise(96 * 96, 11);
+    // A world length that moves the object by about one pixel.
+    let px = mesh.diameter() * 3.5 * 0.5 / cam.fx;
+    let mut pose = some_pose();
+    let found = (0..20).any(|k| {
+        pose.translation = some_pose().translation + DVec3::new(0.31, -0.17, 0.0) * (k as f64 * px);
+        let o = oracle(
+            &mesh.positions,
+            &mesh.triangles,
+            &project_mesh(&mesh, &pose, &cam),
+            &cam,
+            &s,
+        );
+        margin(&o, 96, 96) >= 1e-3
+    });
+    assert!(found, "no configuration without a pixel centre near the outline");
+    let proj = project_mesh(&mesh, &pose, &cam);
+    let mut sil = EdgeSilhouette::new();
+    sil.render(&topo, &proj, &mesh.triangles, &cam, &s).unwrap();
+    let base_structure = structure(&sil);
+    let base_alpha = sil.alpha().to_vec();
+    let mut g = Vec::new();
+    sil.backward_2d(&weights, &mut g);
+    let mut gc = DVec3::ZERO;
+    for (v, gv) in g.iter().enumerate() {
+        let (_, j) = cam.project_with_jacobian(proj.cam[v]);
+        gc += j[0] * gv.x + j[1] * gv.y;
+    }
+    let analytic = cam.rotation.transpose() * gc;
+    let scale = analytic.abs().max_element();
+    assert!(scale > 1e-3 / px);
+    let hstep = 1e-6 * px;
+    for axis in 0..3 {
+        let mut f = [0.0; 2];
+        for (j, sign) in [1.0, -1.0].into_iter().enumerate() {
+            let mut p = pose;
+            p.translation[axis] += sign * hstep;
+            sil.render(&topo, &project_mesh(&mesh, &p, &cam), &mesh.triangles, &cam, &s)
+                .unwrap();
+            assert!(structure(&sil) == base_structure, "axis {axis} changes the structure");
+            f[j] = sil
+                .alpha()
+                .iter()
+                .zip(&base_alpha)
+                .zip(&weights)
+                .map(|((a, b), w)| (a - b) * w)
+                .sum();
+        }
+        let numeric = (f[0] - f[1]) / (2.0 * hstep);
+        assert!(
+            (numeric - analytic[axis]).abs() <= 1e-6 * scale,
+            "axis {axis}: {numeric} vs {} (scale {scale})",
+            analytic[axis]
+        );
+    }
+}
