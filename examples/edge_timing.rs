@@ -124,7 +124,7 @@ fn main() {
     };
     for p in &paths {
         let mesh = if p == "blob2k" {
-            Some(localisebot::synth::blob_mesh(22, 50))
+            Some(localisebot::app::synth::blob_mesh(22, 50))
         } else {
             load(p)
         };

@@ -4,50 +4,58 @@
 //! after Vijayaraghavan et al., "LocaliseBot: Multi-view 3D object localisation
 //! with differentiable rendering for robot grasping".
 //!
-//! The pipeline (see `ARCHITECTURE.md`):
+//! The pipeline (see `ARCHITECTURE.md`), one public module per stage:
 //!
-//! 1. [`io`] — bytes to [`Mesh`], [`Mask`], [`Camera`], [`Scene`];
-//! 2. [`raster`] — project a posed mesh into each view; hard silhouettes, soft
-//!    (SoftRas) silhouettes and their analytic backward pass;
-//! 3. [`loss`] — IoU and contour (Hausdorff) losses against the masks;
-//! 4. [`optim`] — coarse orientation search, then gradient refinement;
-//! 5. [`metrics`] — pose errors, ADD/ADD-S, IoU, Hausdorff distance.
+//! 1. [`io`] — bytes to a [`Mesh`] and [`View`]s (camera, [`Mask`], optional ignore
+//!    mask and image) of a [`Scene`];
+//! 2. [`raster`] — project a posed mesh into a view; hard silhouettes, soft
+//!    silhouettes (SoftRas, and the silhouette-edge variant) and their analytic
+//!    backward passes;
+//! 3. [`loss`] — each view's target in its object window, and the one objective
+//!    `λ1·IoU + λ2·contour` with its gradient and Gauss–Newton model;
+//! 4. [`optim`] — initialisation, the coarse orientation search, the coarse-to-fine
+//!    schedule, Adam and Levenberg–Marquardt;
+//! 5. [`Estimator`] — the pipeline as a step-wise object, ending in a [`FitResult`]
+//!    with a [`Verdict`];
+//! 6. [`metrics`], [`symmetry`] — pose errors, ADD/ADD-S, IoU, Hausdorff distance.
 //!
-//! The core is pure Rust: no file system, no clocks, no threads; the command line
-//! (`src/main.rs`) and the WebAssembly binding (`src/wasm.rs`) wrap it.
+//! [`app`] holds what is built on the pipeline: synthetic scenes, procedural shapes,
+//! overlays, grasps and the paper's evaluation. The core is pure Rust: no file
+//! system, no clocks, no threads; the command line (`src/main.rs`) and the
+//! WebAssembly binding (`src/wasm.rs`) wrap it.
 
 #![warn(missing_docs)]
 
-pub mod camera;
-pub mod error;
-pub mod estimator;
-pub mod eval;
-pub mod grasp;
+mod camera;
+mod error;
+mod estimator;
+mod mask;
+mod mesh;
+mod pose;
+mod result;
+mod verdict;
+mod view;
+
+pub mod app;
 pub mod io;
 pub mod loss;
-pub mod mask;
-pub mod mesh;
 pub mod metrics;
 pub mod optim;
-pub mod overlay;
-pub mod pose;
 pub mod raster;
-pub mod result;
-pub mod shapes;
 pub mod so3;
 pub mod symmetry;
-pub mod synth;
-pub mod verdict;
-pub mod view;
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
 
-pub use camera::{Camera, CameraJson, Convention};
+pub use camera::{Camera, CameraJson, Convention, MAX_SIDE};
 pub use error::{Error, Result};
-pub use estimator::{Estimator, FitSettings, Phase, Progress, ScaleMode, Termination};
+pub use estimator::{
+    robust_weights, Estimator, FitSettings, Phase, Progress, ScaleMode, Termination, ViewFigures, OBJECT_MARGIN,
+};
 pub use io::scene::{load_scene, Scene, SceneJson, ViewJson};
 pub use mask::Mask;
 pub use mesh::{Bounds, Mesh};
-pub use pose::{Pose, PoseJson};
-pub use result::FitResult;
-pub use view::{Rgba, View};
+pub use pose::{mat3_from_rows, mat3_to_rows, mat4_from_rows, mat4_to_rows, Pose, PoseJson, RotationJson};
+pub use result::{FitResult, PoseOut, ViewResult};
+pub use verdict::{judge, Judgement, Verdict, VerdictThresholds};
+pub use view::{Rgba, View, ViewSources};

@@ -70,7 +70,7 @@ pub struct FitResult {
     pub iterations: usize,
     /// Why the fit stopped.
     pub termination: Option<Termination>,
-    /// `ok`, `poor` or `failed` (see [`crate::verdict`]); absent before the fit ends.
+    /// `ok`, `poor` or `failed` (see [`crate::Verdict`]); absent before the fit ends.
     #[serde(default)]
     pub verdict: Option<Verdict>,
     /// Why the verdict is not `ok`, one line each.

@@ -90,7 +90,7 @@ mod tests {
         let cube = Mesh::cuboid(DVec3::splat(1.0));
         assert!(is_symmetric(&cube));
         assert_eq!(symmetries(&cube).len(), 24, "a cube has the whole group");
-        assert!(!is_symmetric(&crate::synth::blob_mesh(12, 25)));
+        assert!(!is_symmetric(&crate::app::synth::blob_mesh(12, 25)));
         // An equivalent pose is the same physical object: ADD between them is ~0,
         // for an anisotropic scale too.
         let gt = Pose {

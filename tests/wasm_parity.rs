@@ -1,5 +1,5 @@
 //! The native side of the wasm parity check, on `tests/fixtures/scenes/toy-3view`: three
-//! 240×200 views of the procedural toy aeroplane (`localisebot::shapes::toy_plane`) made
+//! 240×200 views of the procedural toy aeroplane (`localisebot::app::shapes::toy_plane`) made
 //! by `synthesize` (seed 5). Its mesh file `toy.glb` is not kept: every test writes it
 //! with `io::gltf_write::glb`. This test checks that the committed masks are what the
 //! native hard rasteriser draws now, and that the native fit matches `native_fit.json`,
@@ -8,13 +8,13 @@
 //! `LOCALISEBOT_BLESS=1 cargo test --test wasm_parity`.
 #![cfg(not(target_arch = "wasm32"))]
 
-use localisebot::estimator::{Estimator, FitSettings};
+use localisebot::app::shapes::toy_plane;
+use localisebot::app::synth::{synthesize, SynthSettings};
 use localisebot::io::gltf_write;
 use localisebot::io::png::encode_gray;
 use localisebot::raster::hard;
-use localisebot::shapes::toy_plane;
-use localisebot::synth::{synthesize, SynthSettings};
 use localisebot::{load_scene, CameraJson, PoseJson, SceneJson, ViewJson};
+use localisebot::{Estimator, FitSettings};
 use serde_json::Value;
 use std::path::PathBuf;
 

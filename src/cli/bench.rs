@@ -4,11 +4,11 @@
 //! forward + backward on a given scene at a given pose.
 
 use super::files::{load_mesh, load_pose, load_scene_file, CliResult};
-use localisebot::estimator::{Estimator, FitSettings};
+use localisebot::app::synth::{blob_mesh, synthesize, SynthSettings};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::loss::target::Window;
 use localisebot::raster::soft::SoftSettings;
-use localisebot::synth::{blob_mesh, synthesize, SynthSettings};
+use localisebot::{Estimator, FitSettings};
 use localisebot::{Mesh, Pose, View};
 use std::path::PathBuf;
 use std::time::Instant;

@@ -5,10 +5,11 @@
 use super::files::{load_scene_file, to_json, write, CliResult};
 use super::fit::FitOptions;
 use indicatif::{ProgressBar, ProgressStyle};
-use localisebot::estimator::{Estimator, FitSettings};
-use localisebot::eval::{accuracy_measure, report_markdown, summarise, SceneOutcome, Summary};
+use localisebot::app::eval::{accuracy_measure, report_markdown, summarise, SceneOutcome, Summary};
+use localisebot::app::grasp;
 use localisebot::symmetry::{closest_equivalent, symmetries};
-use localisebot::{grasp, Pose, Scene};
+use localisebot::{Estimator, FitSettings};
+use localisebot::{Pose, Scene};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};

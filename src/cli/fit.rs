@@ -5,12 +5,12 @@
 use super::files::{load_pose, load_scene_file, to_json, write, CliResult};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use localisebot::estimator::{Estimator, FitSettings, Phase, ScaleMode};
+use localisebot::app::overlay;
 use localisebot::io::png::encode_rgba;
 use localisebot::optim::schedule::Optimiser;
 use localisebot::optim::search::Sampling;
-use localisebot::overlay;
-use localisebot::verdict::Verdict;
+use localisebot::Verdict;
+use localisebot::{Estimator, FitSettings, Phase, ScaleMode};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -212,7 +212,7 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
         let pose = est.pose();
         for (v, f) in scene.views.iter().zip(est.view_figures(&pose)) {
             let mut img = overlay::overlay(v, Some(&f.rendered));
-            localisebot::grasp::draw_grasps(&mut img, &scene.grasps, &pose, v.camera());
+            localisebot::app::grasp::draw_grasps(&mut img, &scene.grasps, &pose, v.camera());
             write(&dir.join(format!("{}.png", v.name())), &encode_rgba(&img))?;
         }
     }

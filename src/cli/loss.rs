@@ -4,10 +4,10 @@
 //! same defaults for λ1 and λ2).
 
 use super::files::{load_pose, load_scene_file, to_json, CliResult};
-use localisebot::estimator::FitSettings;
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::loss::target::Window;
 use localisebot::raster::soft::SoftSettings;
+use localisebot::FitSettings;
 use std::path::PathBuf;
 
 /// Arguments of `loss`.

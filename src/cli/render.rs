@@ -3,8 +3,9 @@
 //! grasp rectangles), and each view's grasp rectangles as an OCID/Cornell `.txt`.
 
 use super::files::{load_pose, load_scene_file, write, CliResult};
+use localisebot::app::{grasp, overlay};
 use localisebot::io::png::encode_rgba;
-use localisebot::{grasp, metrics, overlay, raster::hard};
+use localisebot::{metrics, raster::hard};
 use std::path::Path;
 
 /// Runs `render`.

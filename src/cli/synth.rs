@@ -6,11 +6,12 @@
 
 use super::files::{load_mesh, load_pose, read, write, CliResult};
 use clap::Args;
-use localisebot::grasp::antipodal_grasps;
+use localisebot::app::grasp::antipodal_grasps;
+use localisebot::app::shapes;
+use localisebot::app::synth::{synthesize, SynthSettings};
 use localisebot::io::png::{encode_gray, encode_rgba};
 use localisebot::io::{gltf_write, ply};
-use localisebot::synth::{synthesize, SynthSettings};
-use localisebot::{shapes, Mesh};
+use localisebot::Mesh;
 use localisebot::{CameraJson, PoseJson, SceneJson, ViewJson};
 use std::path::{Path, PathBuf};
 
@@ -107,7 +108,7 @@ pub fn run(a: &SynthArgs) -> CliResult {
         let rel = format!("masks/{name}.png");
         let (mask, ignore) = match a.occlude.iter().find(|(v, _)| *v == i) {
             Some(&(_, f)) => {
-                let (cut, occluder) = localisebot::synth::occlude(mask, f, a.seed + i as u64);
+                let (cut, occluder) = localisebot::app::synth::occlude(mask, f, a.seed + i as u64);
                 let rel = format!("masks/{name}_ignore.png");
                 let grey: Vec<u8> = occluder.data.iter().map(|&v| v * 255).collect();
                 write(&a.out.join(&rel), &encode_gray(mask.width, mask.height, &grey))?;

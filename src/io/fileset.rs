@@ -559,10 +559,10 @@ pub fn mesh_references(mesh_file: &str, bytes: &[u8]) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::app::shapes::blob_mesh;
+    use crate::app::synth::{synthesize, SynthSettings};
     use crate::io::gltf_write;
     use crate::io::png::{encode_gray, encode_rgba};
-    use crate::shapes::blob_mesh;
-    use crate::synth::{synthesize, SynthSettings};
     use crate::{CameraJson, PoseJson, ViewJson};
 
     /// A 3-view scene of a small blob, as files: (mesh bytes, per-view (camera JSON,

@@ -161,8 +161,8 @@ pub fn gltf_and_bin(mesh: &Mesh, file: &str, bin_uri: &str) -> Result<(String, V
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::app::shapes::{blob_mesh, toy_plane};
     use crate::io::{load_mesh, no_files};
-    use crate::shapes::{blob_mesh, toy_plane};
 
     fn assert_same(a: &Mesh, b: &Mesh) {
         assert_eq!(a.triangles, b.triangles);

@@ -12,9 +12,9 @@
 //!
 //! The definition (the tests' naive oracle implements exactly this):
 //!
-//! 1. `C(p) ∈ {0, 1}` is [`hard::render_projected_into`](crate::raster::hard::render_projected_into).
+//! 1. `C(p) ∈ {0, 1}` is [`crate::raster::hard::render_projected_into`].
 //! 2. A face is *present* when its three vertices are in front of the near plane and
-//!    its doubled projected area exceeds [`DEGENERATE_DOUBLE_AREA`] px².
+//!    its doubled projected area exceeds [`DEGENERATE_DOUBLE_AREA`](crate::raster::soft::DEGENERATE_DOUBLE_AREA) px².
 //! 3. An edge is a *candidate outline edge* when it has at least one present face and
 //!    all its present faces lie on the same side of the projected edge line (tested
 //!    with each face's third vertex): contours of closed meshes, open borders and

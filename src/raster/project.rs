@@ -201,7 +201,7 @@ mod tests {
     #[test]
     fn pose_gradient_matches_central_differences_of_the_pixels() {
         // L = Σ w_i·(u_i, v_i): its pose gradient from the chain rule vs differences.
-        let mesh = crate::synth::blob_mesh(4, 6);
+        let mesh = crate::app::synth::blob_mesh(4, 6);
         let camera = Camera::look_at(DVec3::new(0.3, -0.2, -4.0), DVec3::ZERO, DVec3::Y, 64, 48, 60.0);
         let pose = Pose {
             rotation: so3::exp(DVec3::new(0.3, 0.1, -0.2)),

@@ -3,6 +3,7 @@
 //! per-view overlays for `ImageData`, the loss trace and the result (SPEC §3).
 
 use super::{to_js, FileSet};
+use crate::app::overlay;
 use crate::error::Result;
 use crate::estimator::{Estimator, FitSettings, Progress};
 use crate::mask::Mask;
@@ -10,7 +11,7 @@ use crate::mesh::Mesh;
 use crate::pose::Pose;
 use crate::result::PoseOut;
 use crate::view::View;
-use crate::{metrics, overlay, raster};
+use crate::{metrics, raster};
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::Clamped;
@@ -28,7 +29,7 @@ pub struct Session {
     iteration: usize,
     rendered: Option<Vec<Mask>>,
     warnings: Vec<String>,
-    grasps: Vec<crate::grasp::Grasp>,
+    grasps: Vec<crate::app::grasp::Grasp>,
 }
 
 /// Progress as JavaScript sees it: the core's, plus the pose and full-resolution IoUs.
@@ -269,7 +270,7 @@ impl Session {
         let v = &self.est.views()[view];
         let mut img = overlay::overlay(v, Some(&rendered));
         // The scene's grasps, carried by the current pose into this view.
-        crate::grasp::draw_grasps(&mut img, &self.grasps, &self.est.pose(), v.camera());
+        crate::app::grasp::draw_grasps(&mut img, &self.grasps, &self.est.pose(), v.camera());
         Ok(Clamped(img.data))
     }
 
@@ -292,7 +293,7 @@ impl Session {
             Some((self.est.mesh(), &pose)),
             &overlay::OverlayStyle::default(),
         );
-        crate::grasp::draw_grasps(&mut img, &self.grasps, &pose, &cam);
+        crate::app::grasp::draw_grasps(&mut img, &self.grasps, &pose, &cam);
         Ok(Clamped(img.data))
     }
 

@@ -399,7 +399,7 @@ fn render_exports_grasp_rectangles() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let txt = std::fs::read_to_string(d.join("ov/view0.grasps.txt")).unwrap();
-    let rects = localisebot::grasp::rectangles_from_txt(&txt).unwrap();
+    let rects = localisebot::app::grasp::rectangles_from_txt(&txt).unwrap();
     assert!(!rects.is_empty() && rects.len() <= 4);
     // A malformed grasp in the scene is named.
     let mut bad = scene.clone();
@@ -575,7 +575,7 @@ fn a_failed_fit_is_named_exits_3_when_strict_and_predicts_nothing_in_eval() {
 
 #[test]
 fn synth_writes_a_procedural_shape_in_each_mesh_format() {
-    let triangles = localisebot::shapes::toy_plane().triangles.len();
+    let triangles = localisebot::app::shapes::toy_plane().triangles.len();
     for (format, files) in [
         ("glb", &["toy.glb"][..]),
         ("gltf", &["toy.gltf", "toy.bin"][..]),

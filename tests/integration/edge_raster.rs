@@ -5,11 +5,11 @@
 
 use crate::hard_raster::{cube, duck};
 use glam::{DVec2, DVec3};
+use localisebot::app::synth::blob_mesh;
 use localisebot::raster::edge::{EdgeRecord, EdgeSilhouette, EdgeTopology, WELD_TOLERANCE};
 use localisebot::raster::hard;
 use localisebot::raster::project::{project_mesh, Projected};
 use localisebot::raster::soft::{SoftSettings, DEGENERATE_DOUBLE_AREA};
-use localisebot::synth::blob_mesh;
 use localisebot::{so3, Camera, Mask, Mesh, Pose};
 use std::collections::HashMap;
 

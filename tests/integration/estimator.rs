@@ -2,11 +2,11 @@
 //! the verdict, the scale modes and the loss weights do what they say.
 
 use crate::{data, reference};
-use localisebot::estimator::{Estimator, FitSettings, Phase, ScaleMode};
+use localisebot::app::synth::{synthesize, SynthSettings};
 use localisebot::metrics::pose_errors;
-use localisebot::synth::{synthesize, SynthSettings};
-use localisebot::verdict::Verdict;
+use localisebot::Verdict;
 use localisebot::{io, load_scene, Mask, Mesh, Pose, View};
+use localisebot::{Estimator, FitSettings, Phase, ScaleMode};
 
 fn mesh(rel: &str) -> Mesh {
     let path = data(rel);
@@ -99,7 +99,7 @@ fn a_given_initial_pose_skips_the_search_and_is_refined() {
 
 #[test]
 fn one_view_is_allowed() {
-    let m = localisebot::synth::blob_mesh(12, 25);
+    let m = localisebot::app::synth::blob_mesh(12, 25);
     let s = synthesize(
         &m,
         &SynthSettings {
@@ -156,7 +156,7 @@ fn an_object_behind_a_camera_is_named() {
 
 #[test]
 fn bad_settings_are_refused() {
-    let m = localisebot::synth::blob_mesh(12, 25);
+    let m = localisebot::app::synth::blob_mesh(12, 25);
     let s = synthesize(
         &m,
         &SynthSettings {
@@ -234,7 +234,7 @@ fn the_search_ranks_the_true_orientation_first_and_refits_translation_and_scale(
 #[test]
 fn the_papers_euler_grid_search_also_finds_the_object() {
     use localisebot::optim::search::Sampling;
-    let m = localisebot::synth::blob_mesh(12, 25);
+    let m = localisebot::app::synth::blob_mesh(12, 25);
     let s = synthesize(
         &m,
         &SynthSettings {
@@ -257,8 +257,8 @@ fn the_papers_euler_grid_search_also_finds_the_object() {
     assert!(e.add_rel < 0.05, "{e:?}");
 }
 
-fn blob_scene(views: usize, seed: u64) -> (Mesh, localisebot::synth::SynthScene) {
-    let m = localisebot::synth::blob_mesh(12, 25);
+fn blob_scene(views: usize, seed: u64) -> (Mesh, localisebot::app::synth::SynthScene) {
+    let m = localisebot::app::synth::blob_mesh(12, 25);
     let s = synthesize(
         &m,
         &SynthSettings {

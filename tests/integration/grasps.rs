@@ -3,7 +3,7 @@
 //! candidates on Box and Duck checked against the surface, drawing and JSON errors.
 
 use glam::{DVec2, DVec3};
-use localisebot::grasp::{
+use localisebot::app::grasp::{
     self, angle_difference_deg, antipodal_grasps, grasp_correct, grasp_rectangle, grasp_transfer_correct,
     rectangle_angle_deg, rectangle_iou, rectangles_from_txt, rectangles_to_txt, Grasp, ANTIPODAL_CLEARANCE,
     ANTIPODAL_CONE_DEG, JAW_FRACTION,

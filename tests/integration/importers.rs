@@ -7,8 +7,8 @@ use glam::{DMat3, DMat4, DVec2, DVec3};
 use localisebot::io::bop::{self, BopOptions, Units};
 use localisebot::io::mask::decode_mask;
 use localisebot::io::nerf::{self, Imported};
-use localisebot::pose::{mat3_from_rows, mat4_from_rows};
 use localisebot::{load_scene, metrics, raster, Scene};
+use localisebot::{mat3_from_rows, mat4_from_rows};
 use std::collections::HashMap;
 
 /// Loads an imported scene through `load_scene`, from memory: the scene file

@@ -7,10 +7,10 @@
 
 use crate::{data, reference};
 use glam::DVec3;
+use localisebot::app::synth::{blob_mesh, synthesize, SynthSettings};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::loss::target::{Window, WindowMode};
 use localisebot::raster::soft::SoftSettings;
-use localisebot::synth::{blob_mesh, synthesize, SynthSettings};
 use localisebot::{so3, Mask, Mesh, Pose, Scene, View};
 
 fn load_case(size: u32) -> (Scene, Pose) {

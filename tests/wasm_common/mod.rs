@@ -1,6 +1,6 @@
 //! The WebAssembly test suite, shared by `tests/wasm.rs` (headless Chromium) and
 //! `tests/wasm_node.rs` (Node). A wasm test cannot read files, so its data is made here
-//! from the project's procedural toy aeroplane (`localisebot::shapes`): the page's
+//! from the project's procedural toy aeroplane (`localisebot::app::shapes`): the page's
 //! example scene by `synth` (4 views with images and grasps, written as the page's
 //! files: `.glb`, PNGs, `scene.json`), and the committed parity scene
 //! `tests/fixtures/scenes/toy-3view` (project-made; its `toy.glb` written here). It
@@ -11,14 +11,14 @@
 //! are parsed in wasm by `tests/wasm_shared.rs`.
 
 use glam::DMat3;
-use localisebot::grasp::antipodal_grasps;
+use localisebot::app::grasp::antipodal_grasps;
+use localisebot::app::shapes::toy_plane;
+use localisebot::app::synth::{synthesize, SynthSettings};
 use localisebot::io::png::{encode_gray, encode_rgba};
 use localisebot::io::{gltf_write, load_mesh, no_files, ply};
+use localisebot::mat3_from_rows;
 use localisebot::metrics::hard_iou;
-use localisebot::pose::mat3_from_rows;
 use localisebot::raster::hard;
-use localisebot::shapes::toy_plane;
-use localisebot::synth::{synthesize, SynthSettings};
 use localisebot::wasm::{check_mesh, mesh_files, scene_files, FileRole, FileSet, Session, SessionBuilder};
 use localisebot::{CameraJson, Mesh, PoseJson, SceneJson, ViewJson};
 use wasm_bindgen::{JsCast, JsError, JsValue};

@@ -14,7 +14,7 @@ use glam::{DMat3, DQuat, DVec3};
 use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 
-pub use crate::shapes::blob_mesh;
+pub use crate::app::shapes::blob_mesh;
 
 /// How to make a synthetic scene.
 #[derive(Debug, Clone)]

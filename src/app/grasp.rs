@@ -56,9 +56,9 @@ pub use rect::{
     rectangles_to_txt, ANGLE_TOLERANCE_DEG, IOU_THRESHOLD,
 };
 
+use crate::app::overlay::draw_line;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::overlay::draw_line;
 use crate::pose::Pose;
 use crate::view::Rgba;
 use glam::{DVec2, DVec3};

@@ -294,10 +294,10 @@ mod tests {
     #[test]
     fn window_overlay_shows_the_object_large() {
         use crate::loss::target::{Window, WindowMode};
-        let mesh = crate::synth::blob_mesh(8, 12);
-        let s = crate::synth::synthesize(
+        let mesh = crate::app::synth::blob_mesh(8, 12);
+        let s = crate::app::synth::synthesize(
             &mesh,
-            &crate::synth::SynthSettings {
+            &crate::app::synth::SynthSettings {
                 views: 1,
                 width: 320,
                 height: 240,
