@@ -5,7 +5,10 @@
 #
 #   toy   the project's procedural toy aeroplane (src/shapes.rs), 4 views: always;
 #   duck  the Khronos Duck, read where it is in ../shared/data (the shared third-party
-#         data beside the repository), 4 views: when ../shared is there.
+#         data beside the repository), 4 views: when ../shared is there;
+#   lmo-duck  real photographs: three Linemod-Occluded views of the duck (Kinect,
+#         640×480), imported with `import bop`, the other objects as ignore masks:
+#         when ../shared/data/real/lmo is there.
 #
 # Adding an example is one `example ID "TITLE" COMMAND...` line below: COMMAND is run
 # with `--out www/examples/ID` appended and must write ID/scene.json and the files it
@@ -40,6 +43,14 @@ if [ -f "$SHARED/gltf/Duck/glTF-Binary/Duck.glb" ]; then
 else
   echo "note: $SHARED/gltf/Duck/glTF-Binary/Duck.glb not found (../shared must sit beside the" \
     "repository): the Duck example is left out" >&2
+fi
+
+if [ -f "$SHARED/real/lmo/test/000002/scene_gt.json" ]; then
+  # Views 102, 362, 476: the duck at least 95 % visible, seen from directions 50°+ apart.
+  example lmo-duck "Real photographs: Linemod-Occluded duck (3 views)" \
+    "$B" import bop "$SHARED/real/lmo" --scene 2 --object 9 --images 102,362,476 --masks visib --ignore others
+else
+  echo "note: $SHARED/real/lmo not found: the real-photograph example is left out" >&2
 fi
 
 {

@@ -1,24 +1,25 @@
-//! `localisebot bench`: the speed figures of BENCHMARKS.md — median milliseconds of
-//! one forward + backward (multi-view loss and its 9-gradient) on fixed synthetic
-//! configurations, and seconds of a full fit from no initial pose; or the same
-//! forward + backward on a given scene at a given pose.
+//! `localisebot bench`: the speed figures of BENCHMARKS.md. Per configuration: the
+//! median milliseconds of one evaluation of the fit's objective with its 9-gradient
+//! (`fwd_bwd_ms`) and with its Gauss–Newton model (`gn_ms`, what one LM iteration
+//! costs), over 4 views; and the seconds of full fits from no initial pose with
+//! [`FitSettings::default`]: the Duck at 256², the page's bundled example (the toy
+//! aeroplane, built as `scripts/build-examples.sh` builds it) and a real 640×480
+//! three-view scene (Linemod-Occluded, imported from `../shared`). Or the same
+//! evaluation on a given scene at a given pose.
 
 use super::files::{load_mesh, load_pose, load_scene_file, CliResult};
+use localisebot::app::shapes;
 use localisebot::app::synth::{blob_mesh, synthesize, SynthSettings};
+use localisebot::io::bop::{self, BopOptions, MaskKind};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::loss::target::Window;
 use localisebot::raster::soft::SoftSettings;
-use localisebot::{Estimator, FitSettings};
-use localisebot::{Mesh, Pose, View};
-use std::path::PathBuf;
+use localisebot::{load_scene, Estimator, FitSettings, Mesh, Pose, Scene, View};
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The benchmark's Duck (Khronos sample), read at run time where the shared
-/// third-party data sits: `../shared` beside the repository.
-const DUCK: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../shared/data/gltf/Duck/glTF-Binary/Duck.glb"
-);
+/// The shared third-party data, read at run time: `../shared/data` beside the repository.
+const SHARED_DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data");
 
 /// Arguments of `bench`.
 #[derive(clap::Args)]
@@ -35,28 +36,31 @@ pub struct BenchArgs {
     /// σ in pixel² (default 1.0).
     #[arg(long, default_value_t = 1.0)]
     sigma: f64,
-    /// Repetitions of the forward + backward (the median is reported).
+    /// Repetitions of each evaluation (the median is reported).
     #[arg(long, default_value_t = 30)]
     reps: usize,
-    /// Skip the full fits (forward + backward figures only).
+    /// Skip the full fits (evaluation figures only).
     #[arg(long)]
     no_fit: bool,
-    /// The Duck mesh of the fixed configurations (default: the shared data's
-    /// `Duck.glb`, in `../shared` beside the repository).
-    #[arg(long, default_value = DUCK)]
-    duck: PathBuf,
+    /// The shared data folder (meshes, the real scene; default `../shared/data`
+    /// beside the repository).
+    #[arg(long, default_value = SHARED_DATA)]
+    data: PathBuf,
 }
 
+/// One line of figures.
+#[derive(Default)]
 struct Row {
-    mesh: String,
+    name: String,
     triangles: usize,
     views: usize,
-    size: u32,
-    sigma: f64,
-    fwd_bwd_ms: f64,
+    size: String,
+    fwd_bwd_ms: Option<f64>,
+    gn_ms: Option<f64>,
     fit_s: Option<f64>,
     fit_add_rel: Option<f64>,
     fit_iou: Option<f64>,
+    fit_verdict: Option<String>,
 }
 
 /// Runs `bench`.
@@ -75,77 +79,164 @@ pub fn run(a: &BenchArgs) -> CliResult {
             .map(|v| v.camera().width.max(v.camera().height))
             .max()
             .unwrap_or(0);
-        let ms = time_fwd_bwd(&scene.mesh, &scene.views, &pose, size, a.sigma, reps);
+        let (fwd_bwd, gn) = time_objective(&scene.mesh, &scene.views, &pose, size, a.sigma, reps)?;
         rows.push(Row {
-            mesh: scene_path.display().to_string(),
+            name: scene_path.display().to_string(),
             triangles: scene.mesh.triangles.len(),
             views: scene.views.len(),
-            size,
-            sigma: a.sigma,
-            fwd_bwd_ms: ms,
-            fit_s: None,
-            fit_add_rel: None,
-            fit_iou: None,
+            size: size.to_string(),
+            fwd_bwd_ms: Some(fwd_bwd),
+            gn_ms: Some(gn),
+            ..Row::default()
         });
-    } else {
-        if !a.duck.is_file() {
-            return Err(format!(
-                "{}: not found: the benchmark's Duck is read from the shared data folder `shared`, \
-                 which must sit beside the repository, or from --duck PATH",
-                a.duck.display()
-            ));
+        print_rows(&rows, a.json);
+        return Ok(());
+    }
+    let shared = |rel: &str| -> CliResult<PathBuf> {
+        let p = a.data.join(rel);
+        if p.exists() {
+            Ok(p)
+        } else {
+            Err(format!(
+                "{}: not found: the benchmark reads meshes and the real scene from the shared data folder \
+                 (`shared/data`, beside the repository), or from --data DIR",
+                p.display()
+            ))
         }
-        let duck = load_mesh(&a.duck)?;
-        let meshes = [
-            ("blob500".to_string(), blob_mesh(12, 25)),
-            ("blob2k".to_string(), blob_mesh(22, 50)),
-            ("blob10k".to_string(), blob_mesh(52, 100)),
-            ("duck".to_string(), duck),
-        ];
-        for (name, mesh) in &meshes {
-            for size in [128u32, 256] {
-                let synth = SynthSettings {
+    };
+    let duck = load_mesh(&shared("gltf/Duck/glTF-Binary/Duck.glb")?)?;
+    let engine = load_mesh(&shared("gltf/2CylinderEngine/glTF-Binary/2CylinderEngine.glb")?)?;
+    let meshes = [
+        ("blob500", blob_mesh(12, 25), true),
+        ("blob2k", blob_mesh(22, 50), true),
+        ("blob10k", blob_mesh(52, 100), true),
+        ("duck", duck.clone(), true),
+        ("2CylinderEngine", engine, false),
+    ];
+    for (name, mesh, both_sizes) in &meshes {
+        for size in [128u32, 256] {
+            if size == 256 && !both_sizes {
+                continue;
+            }
+            let s = synthesize(
+                mesh,
+                &SynthSettings {
                     views: 4,
                     width: size,
                     height: size,
                     seed: 11,
                     ..Default::default()
-                };
-                let s = synthesize(mesh, &synth, None).map_err(|e| e.to_string())?;
-                let views = s.views();
-                let ms = time_fwd_bwd(mesh, &views, &s.pose, size, a.sigma, reps);
-                let (fit_s, fit_add_rel, fit_iou) = if a.no_fit || size != 256 {
-                    (None, None, None)
-                } else {
-                    let start = Instant::now();
-                    let mut est = Estimator::new(mesh.clone(), views.clone(), None, FitSettings::default())
-                        .map_err(|e| e.to_string())?;
-                    est.run(usize::MAX).map_err(|e| e.to_string())?;
-                    let secs = start.elapsed().as_secs_f64();
-                    let r = est.result(secs, Some(&s.pose));
-                    (Some(secs), r.errors.map(|e| e.add_rel), Some(r.mean_iou))
-                };
-                rows.push(Row {
-                    mesh: name.clone(),
-                    triangles: mesh.triangles.len(),
-                    views: 4,
-                    size,
-                    sigma: a.sigma,
-                    fwd_bwd_ms: ms,
-                    fit_s,
-                    fit_add_rel,
-                    fit_iou,
-                });
-            }
+                },
+                None,
+            )
+            .map_err(|e| e.to_string())?;
+            let (fwd_bwd, gn) = time_objective(mesh, &s.views(), &s.pose, size, a.sigma, reps)?;
+            rows.push(Row {
+                name: name.to_string(),
+                triangles: mesh.triangles.len(),
+                views: 4,
+                size: size.to_string(),
+                fwd_bwd_ms: Some(fwd_bwd),
+                gn_ms: Some(gn),
+                ..Row::default()
+            });
         }
+    }
+    if !a.no_fit {
+        // The Duck at 256², 4 views.
+        let s = synth_scene(&duck, 4, 256, 256, 11)?;
+        rows.push(fit_row("fit: duck", &duck, s.views(), &s.pose, "256²")?);
+        // The page's bundled example, as scripts/build-examples.sh makes it.
+        let toy = shapes::toy_plane();
+        let s = synth_scene(&toy, 4, 256, 256, 7)?;
+        rows.push(fit_row("fit: bundled example (toy)", &toy, s.views(), &s.pose, "256²")?);
+        // A real 640×480 three-view scene: the LM-O duck, as the page's real example.
+        let real = real_scene(&shared("real/lmo")?)?;
+        let gt = real
+            .ground_truth_pose
+            .ok_or("the imported real scene has no ground truth")?;
+        rows.push(fit_row(
+            "fit: real LM-O duck",
+            &real.mesh,
+            real.views.clone(),
+            &gt,
+            "640×480",
+        )?);
     }
     print_rows(&rows, a.json);
     Ok(())
 }
 
-/// Median milliseconds of one multi-view loss + 9-gradient at `pose` (the fit's
-/// objective with its default λ1, λ2; every view's whole image at `size`).
-fn time_fwd_bwd(mesh: &Mesh, views: &[View], pose: &Pose, size: u32, sigma: f64, reps: usize) -> f64 {
+fn synth_scene(mesh: &Mesh, views: usize, w: u32, h: u32, seed: u64) -> CliResult<localisebot::app::synth::SynthScene> {
+    synthesize(
+        mesh,
+        &SynthSettings {
+            views,
+            width: w,
+            height: h,
+            seed,
+            ..Default::default()
+        },
+        None,
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// The Linemod-Occluded duck in views 102, 362 and 476, its other objects ignored
+/// (as the page's real example).
+fn real_scene(lmo: &Path) -> CliResult<Scene> {
+    let mut opts = BopOptions::new(2, 9);
+    opts.image_ids = Some(vec![102, 362, 476]);
+    opts.masks = MaskKind::Visible;
+    opts.ignore_others = true;
+    let imported =
+        bop::import(&|p| std::fs::read(lmo.join(p)).ok(), &opts).map_err(|e| format!("{}: {e}", lmo.display()))?;
+    let text = imported.scene.to_json_string();
+    let files = imported.files;
+    load_scene("scene.json", &text, &|p| {
+        files.iter().find(|(rel, _)| rel == p).map(|(_, b)| b.clone())
+    })
+    .map_err(|e| e.to_string())
+}
+
+/// A full fit from no initial pose with the default settings.
+fn fit_row(name: &str, mesh: &Mesh, views: Vec<View>, truth: &Pose, size: &str) -> CliResult<Row> {
+    let n = views.len();
+    let start = Instant::now();
+    let mut est = Estimator::new(mesh.clone(), views, None, FitSettings::default()).map_err(|e| e.to_string())?;
+    est.run(usize::MAX).map_err(|e| e.to_string())?;
+    let secs = start.elapsed().as_secs_f64();
+    let r = est.result(secs, Some(truth));
+    Ok(Row {
+        name: name.into(),
+        triangles: mesh.triangles.len(),
+        views: n,
+        size: size.into(),
+        fit_s: Some(secs),
+        fit_add_rel: r.errors.map(|e| {
+            if r.symmetric == Some(true) {
+                e.add_s_rel
+            } else {
+                e.add_rel
+            }
+        }),
+        fit_iou: Some(r.mean_iou),
+        fit_verdict: r.verdict.map(|v| v.as_str().to_string()),
+        ..Row::default()
+    })
+}
+
+/// Median milliseconds of one objective evaluation with gradient, and with the
+/// Gauss–Newton model, at a pose slightly off `pose` (as during a fit): the fit's
+/// objective with its default λ1, λ2, every view's whole image at `size`.
+fn time_objective(
+    mesh: &Mesh,
+    views: &[View],
+    pose: &Pose,
+    size: u32,
+    sigma: f64,
+    reps: usize,
+) -> CliResult<(f64, f64)> {
     let d = FitSettings::default();
     let settings = ObjectiveSettings {
         soft: SoftSettings { sigma, eps: 1e-4 },
@@ -153,57 +244,76 @@ fn time_fwd_bwd(mesh: &Mesh, views: &[View], pose: &Pose, size: u32, sigma: f64,
         lambda_contour: d.lambda_contour,
     };
     let windows: Vec<Window> = views.iter().map(|v| Window::full(v.camera())).collect();
-    let Ok(mut objective) = Objective::new(views, &windows, size, settings) else {
-        return f64::NAN;
-    };
-    // A pose slightly off the truth, as during a fit.
+    let mut objective = Objective::new(views, &windows, size, settings).map_err(|e| e.to_string())?;
     let p = Pose {
-        translation: pose.translation + glam::DVec3::splat(0.01),
+        translation: pose.translation + glam::DVec3::splat(0.01 * mesh.diameter() * pose.scale.max_element()),
         ..*pose
     };
-    let _ = objective.value_and_gradient(mesh, &p); // warm the buffers
-    let mut times: Vec<f64> = (0..reps)
-        .map(|_| {
+    let median = |f: &mut dyn FnMut() -> localisebot::Result<()>| -> CliResult<f64> {
+        f().map_err(|e| e.to_string())?; // warm the buffers
+        let mut times = Vec::with_capacity(reps);
+        for _ in 0..reps {
             let t = Instant::now();
-            let _ = std::hint::black_box(objective.value_and_gradient(mesh, &p));
-            t.elapsed().as_secs_f64() * 1e3
-        })
-        .collect();
-    times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
+            f().map_err(|e| e.to_string())?;
+            times.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        times.sort_by(f64::total_cmp);
+        Ok(times[times.len() / 2])
+    };
+    let fwd_bwd = median(&mut || {
+        objective
+            .value_and_gradient(mesh, &p)
+            .map(|e| drop(std::hint::black_box(e)))
+    })?;
+    let gn = median(&mut || {
+        objective
+            .normal_equations(mesh, &p)
+            .map(|e| drop(std::hint::black_box(e)))
+    })?;
+    Ok((fwd_bwd, gn))
 }
 
 fn print_rows(rows: &[Row], json: bool) {
     if json {
         for r in rows {
             let mut v = serde_json::json!({
-                "mesh": r.mesh, "triangles": r.triangles, "views": r.views, "size": r.size,
-                "sigma": r.sigma, "fwd_bwd_ms": r.fwd_bwd_ms,
+                "name": r.name, "triangles": r.triangles, "views": r.views, "size": r.size,
             });
-            if let Some(s) = r.fit_s {
-                v["fit_s"] = s.into();
-            }
-            if let Some(s) = r.fit_add_rel {
-                v["fit_add_rel"] = s.into();
-            }
-            if let Some(s) = r.fit_iou {
-                v["fit_iou"] = s.into();
+            let mut put = |k: &str, x: Option<f64>| {
+                if let Some(x) = x {
+                    v[k] = x.into();
+                }
+            };
+            put("fwd_bwd_ms", r.fwd_bwd_ms);
+            put("gn_ms", r.gn_ms);
+            put("fit_s", r.fit_s);
+            put("fit_add_rel", r.fit_add_rel);
+            put("fit_iou", r.fit_iou);
+            if let Some(s) = &r.fit_verdict {
+                v["fit_verdict"] = s.as_str().into();
             }
             println!("{v}");
         }
         return;
     }
     println!(
-        "{:<28} {:>9} {:>5} {:>6} {:>7} {:>12} {:>8} {:>9}",
-        "mesh", "triangles", "views", "size", "sigma", "fwd+bwd ms", "fit s", "fit ADD"
+        "{:<28} {:>9} {:>5} {:>8} {:>11} {:>8} {:>7} {:>9} {:>7} {:>7}",
+        "configuration", "triangles", "views", "size", "fwd+bwd ms", "GN ms", "fit s", "ADD(-S)", "IoU", "verdict"
     );
+    let f = |x: Option<f64>, d: usize| x.map_or("-".to_string(), |x| format!("{x:.d$}"));
     for r in rows {
-        let fit = r.fit_s.map_or("-".to_string(), |s| format!("{s:.2}"));
-        let add = r.fit_add_rel.map_or("-".to_string(), |s| format!("{:.2}%", 100.0 * s));
-        let iou = r.fit_iou.map_or("-".to_string(), |s| format!("{s:.4}"));
         println!(
-            "{:<28} {:>9} {:>5} {:>6} {:>7.3} {:>12.3} {:>8} {:>9} {:>8}",
-            r.mesh, r.triangles, r.views, r.size, r.sigma, r.fwd_bwd_ms, fit, add, iou
+            "{:<28} {:>9} {:>5} {:>8} {:>11} {:>8} {:>7} {:>9} {:>7} {:>7}",
+            r.name,
+            r.triangles,
+            r.views,
+            r.size,
+            f(r.fwd_bwd_ms, 2),
+            f(r.gn_ms, 2),
+            f(r.fit_s, 2),
+            r.fit_add_rel.map_or("-".to_string(), |s| format!("{:.2}%", 100.0 * s)),
+            f(r.fit_iou, 4),
+            r.fit_verdict.as_deref().unwrap_or("-")
         );
     }
 }

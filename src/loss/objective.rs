@@ -16,7 +16,9 @@
 //! term is `Σ_p [A_p·d_out + (1 − A_p)·d_in]/N`. Writing each as a residual
 //! `r_p = √(2ℓ_p)` (so that `½Σr² = L` exactly) gives the Gauss–Newton curvature
 //! `Σ_p ℓ'_p²/(2ℓ_p) · J_p J_pᵀ`, `J_p = ∂A_p/∂θ` — for the IoU term the
-//! iteratively-reweighted least-squares weights `1/(2U·|A_p − M_p|)` of an L1 fit.
+//! iteratively-reweighted least-squares weights `1/(2U·|A_p − M_p|)` of an L1 fit,
+//! with U taken from the view's previous evaluation (so that one sweep accumulates
+//! one 9×9 matrix).
 //! The gradient in the equations is the exact gradient of L (U's own dependence on A
 //! included), and the Levenberg–Marquardt acceptance test uses L itself, so LM
 //! minimises the paper's loss, not a surrogate.
@@ -115,6 +117,8 @@ pub struct Objective {
     weights: Vec<f64>,
     settings: ObjectiveSettings,
     bits: BitMask,
+    /// Each view's soft union U at its last evaluation, for the Gauss–Newton model.
+    model_union: Vec<f64>,
 }
 
 /// `Σ a` over known pixels, and `Σ a` over known object pixels, of one view.
@@ -164,6 +168,7 @@ impl Objective {
             .map(|(v, w)| ViewTarget::new(v, *w, resolution, contour))
             .collect::<Result<Vec<_>>>()?;
         Ok(Objective {
+            model_union: targets.iter().map(|t| t.area.max(1.0) + UNION_EPS).collect(),
             rasters: vec![SoftRasterizer::new(); targets.len()],
             weights: vec![1.0; targets.len()],
             targets,
@@ -240,6 +245,7 @@ impl Objective {
             let t = &self.targets[i];
             let sil = self.rasters[i].render(mesh, pose, &t.camera, &self.settings.soft)?;
             let (inter, union) = iou_sums(t, &sil.alpha);
+            self.model_union[i] = union;
             let v = self.view_value(i, inter, union);
             out.total += self.weights[i] * v.total;
             out.views.push(v);
@@ -266,6 +272,7 @@ impl Objective {
                     [m * k, (1.0 - m) * k, cw.map_or(0.0, |w| w[p])]
                 })?;
             let (inter, union) = iou_sums(t, &self.rasters[i].silhouette().alpha);
+            self.model_union[i] = union;
             let v = self.view_value(i, inter, union);
             let s = &self.settings;
             let (c_mask, c_back) = (-s.lambda_iou / union, s.lambda_iou * inter / (union * union));
@@ -290,8 +297,11 @@ impl Objective {
             let t = &self.targets[i];
             let contour = t.contour.as_ref().filter(|_| l2 > 0.0);
             let mut g = [[0.0f64; POSE_DIM]; 3];
-            let mut h_iou = [[0.0f64; POSE_DIM]; POSE_DIM];
-            let mut h_contour = [[0.0f64; POSE_DIM]; POSE_DIM];
+            let mut h = [[0.0f64; POSE_DIM]; POSE_DIM];
+            // The IoU weights' 1/U from the view's previous evaluation (the union is a
+            // sum over the whole canvas, known only after the sweep); exact again on a
+            // repeated evaluation at the same pose.
+            let iou_scale = l1 / self.model_union[i];
             self.rasters[i].render_with_jacobians(mesh, pose, &t.camera, &self.settings.soft, |p, a, j| {
                 if !t.is_known(p) {
                     return;
@@ -301,30 +311,27 @@ impl Objective {
                 for k in 0..POSE_DIM {
                     g[f][k] += j[k];
                 }
-                // IRLS weight of |A − M| (the 1/U factor is applied below).
-                let c = 0.5 / (a - m).abs().max(1e-12);
-                accumulate(&mut h_iou, j, c);
+                // IRLS weight of |A − M|, and the contour's w²/(2ℓ).
+                let mut c = iou_scale * 0.5 / (a - m).abs().max(1e-12);
                 if let Some(ct) = contour {
                     let w = ct.gradient()[p];
                     for k in 0..POSE_DIM {
                         g[2][k] += w * j[k];
                     }
-                    let c = 0.5 * w * w / ct.pixel_loss(p, a).max(1e-300);
-                    accumulate(&mut h_contour, j, c);
+                    c += l2 * 0.5 * w * w / ct.pixel_loss(p, a).max(1e-300);
                 }
+                accumulate(&mut h, j, c);
             })?;
             let (inter, union) = iou_sums(t, &self.rasters[i].silhouette().alpha);
+            self.model_union[i] = union;
             let v = self.view_value(i, inter, union);
             let w = self.weights[i] / norm;
             let (c_mask, c_back) = (-l1 / union, l1 * inter / (union * union));
             for a in 0..POSE_DIM {
                 ne.jtr[a] += w * (c_mask * g[0][a] + c_back * g[1][a] + l2 * g[2][a]);
-                for b in a..POSE_DIM {
-                    let hv = w * (l1 / union * h_iou[a][b] + l2 * h_contour[a][b]);
-                    ne.jtj[a][b] += hv;
-                    if b != a {
-                        ne.jtj[b][a] += hv;
-                    }
+                // Only the upper triangle was accumulated.
+                for (b, v) in ne.jtj[a].iter_mut().enumerate() {
+                    *v += w * if b >= a { h[a][b] } else { h[b][a] };
                 }
             }
             ev.total += w * v.total;

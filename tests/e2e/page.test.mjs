@@ -307,6 +307,36 @@ test('examples: every other listed example loads with the views its scene.json n
   await page.context().close();
 });
 
+test('real photographs: the Linemod-Occluded example fits to verdict ok, its object windows shown over the photographs', async () => {
+  const sharedLmo = existsSync(join(root, '..', 'shared', 'data', 'real', 'lmo', 'test', '000002', 'scene_gt.json'));
+  const lmo = examples.find((e) => e.id === 'lmo-duck');
+  assert.equal(Boolean(lmo), sharedLmo, 'examples/index.json lists the real scene iff ../shared has it');
+  if (!lmo) {
+    console.log('  ../shared/data/real/lmo is not beside the repository: no real example was built');
+    return;
+  }
+  const page = await openPage();
+  await page.waitForFunction(() => document.querySelector('[data-testid=example-choice]').options.length > 0);
+  await byId(page, 'example-choice').selectOption(lmo.path);
+  await byId(page, 'load-example').click();
+  await page.waitForFunction(() => document.querySelectorAll('.view').length === 3, null, { timeout: 60_000 });
+  await waitLoaded(page);
+  const t = await fitToConvergence(page);
+  assert.match(t.status, /^done — verdict ok/, t.status);
+  for (const v of await ious(page)) assert.ok(v >= 0.9, `view IoU ${v} < 0.9`);
+  // The object fills the window: the photograph's window with both contours on it.
+  const stats = (await canvasStats(page)).filter((s) => s.id !== 'loss');
+  for (const s of stats) {
+    assert.equal(s.pixels, 256 * 256);
+    assert.ok(s.magenta > 200 && s.varied > s.pixels * 0.5, `window overlay: ${JSON.stringify(s)}`);
+  }
+  const shot = join(artifacts, 'real.png');
+  await page.screenshot({ path: shot, fullPage: true });
+  assert.deepEqual(page.problems, []);
+  console.log(`  status: ${t.status} (${t.wall.toFixed(2)} s wall); screenshot: ${relative(root, shot)}`);
+  await page.context().close();
+});
+
 test('file input: a .gltf + .bin scene (flat file names) converges', async () => {
   const page = await openPage();
   await upload(page, folderFiles(gltfScene));

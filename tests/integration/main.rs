@@ -10,6 +10,8 @@ mod importers;
 mod mesh_loading;
 mod metrics;
 mod objective;
+mod occlusion;
+mod real;
 mod soft_raster;
 
 /// The shared third-party data, `../shared` beside the repository (see its

@@ -249,6 +249,8 @@ fn gauss_newton_model_matches_its_definition() {
     let (l1, l2) = (1.0, 0.6);
     let windows: Vec<Window> = views.iter().map(|v| Window::full(v.camera())).collect();
     let mut o = Objective::new(&views, &windows, 36, settings(1.2, l1, l2)).unwrap();
+    // Twice: the IoU weights' 1/U is that of the previous evaluation, here the same pose.
+    o.normal_equations(&mesh, &pose).unwrap();
     let (_, ne) = o.normal_equations(&mesh, &pose).unwrap();
     let h = 1e-6;
     let n = views.len() as f64;
