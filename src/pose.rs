@@ -8,7 +8,7 @@ use glam::{DMat3, DMat4, DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
 /// Rotation, translation and per-axis scale of the object in the world.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Pose {
     /// Object-to-world rotation (orthonormal, det +1).
     pub rotation: DMat3,

@@ -1,11 +1,13 @@
-//! `localisebot bench`: the speed figures of BENCHMARKS.md. Per configuration: the
-//! median milliseconds of one evaluation of the fit's objective with its 9-gradient
+//! `localisebot bench`: the speed figures of BENCHMARKS.md, for one soft rasteriser
+//! (`--raster edge`, the default, or `softras`). Per configuration: the median
+//! milliseconds of one evaluation of the fit's objective with its 9-gradient
 //! (`fwd_bwd_ms`) and with its Gauss–Newton model (`gn_ms`, what one LM iteration
-//! costs), over 4 views; and the seconds of full fits from no initial pose with
-//! [`FitSettings::default`]: the Duck at 256², the page's bundled example (the toy
-//! aeroplane, built as `scripts/build-examples.sh` builds it) and a real 640×480
-//! three-view scene (Linemod-Occluded, imported from `../shared`). Or the same
-//! evaluation on a given scene at a given pose.
+//! costs), over 4 views, on one thread; and the seconds of full fits from no initial
+//! pose with [`FitSettings::default`] (views in parallel on the machine's cores; `--threads`
+//! sets how many): the Duck at 256², the page's bundled example (the toy aeroplane,
+//! built as `scripts/build-examples.sh` builds it) and a real 640×480 three-view scene
+//! (Linemod-Occluded, imported from `../shared`). Or the same evaluation on a given
+//! scene at a given pose.
 
 use super::files::{load_mesh, load_pose, load_scene_file, CliResult};
 use localisebot::app::shapes;
@@ -13,6 +15,7 @@ use localisebot::app::synth::{blob_mesh, synthesize, SynthSettings};
 use localisebot::io::bop::{self, BopOptions, MaskKind};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::loss::target::Window;
+use localisebot::raster::silhouette::{RasterKind, RenderMesh};
 use localisebot::raster::soft::SoftSettings;
 use localisebot::{load_scene, Estimator, FitSettings, Mesh, Pose, Scene, View};
 use std::path::{Path, PathBuf};
@@ -46,12 +49,20 @@ pub struct BenchArgs {
     /// beside the repository).
     #[arg(long, default_value = SHARED_DATA)]
     data: PathBuf,
+    /// The soft rasteriser to time (default edge, the fit's default).
+    #[arg(long, value_enum, default_value = "edge")]
+    raster: super::fit::RasterArg,
+    /// Threads for the full fits (default: all cores; evaluations always use one).
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 /// One line of figures.
 #[derive(Default)]
 struct Row {
     name: String,
+    raster: &'static str,
+    threads: usize,
     triangles: usize,
     views: usize,
     size: String,
@@ -68,6 +79,42 @@ pub fn run(a: &BenchArgs) -> CliResult {
     if !(a.sigma > 0.0 && a.sigma.is_finite()) {
         return Err(format!("--sigma must be a positive number, got {}", a.sigma));
     }
+    let pool = |n: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| format!("cannot start {n} threads: {e}"))
+    };
+    let one = pool(1)?;
+    let all = pool(a.threads.unwrap_or(0))?;
+    let raster = a.raster.kind();
+    let mut rows = one.install(|| evaluations(a, raster))?;
+    if a.scene.is_none() && !a.no_fit {
+        rows.extend(all.install(|| fits(a, raster))?);
+    }
+    let name = raster_name(raster);
+    let threads = all.current_num_threads();
+    for r in &mut rows {
+        r.raster = name;
+        if r.fit_s.is_some() {
+            r.threads = threads;
+        } else {
+            r.threads = 1;
+        }
+    }
+    print_rows(&rows, a.json);
+    Ok(())
+}
+
+fn raster_name(k: RasterKind) -> &'static str {
+    match k {
+        RasterKind::Edge => "edge",
+        RasterKind::SoftRas => "softras",
+    }
+}
+
+/// The evaluation figures (one thread), or those of `--scene`.
+fn evaluations(a: &BenchArgs, raster: RasterKind) -> CliResult<Vec<Row>> {
     let reps = a.reps.max(1);
     let mut rows = Vec::new();
     if let Some(scene_path) = &a.scene {
@@ -79,7 +126,7 @@ pub fn run(a: &BenchArgs) -> CliResult {
             .map(|v| v.camera().width.max(v.camera().height))
             .max()
             .unwrap_or(0);
-        let (fwd_bwd, gn) = time_objective(&scene.mesh, &scene.views, &pose, size, a.sigma, reps)?;
+        let (fwd_bwd, gn) = time_objective(&scene.mesh, &scene.views, &pose, size, a.sigma, reps, raster)?;
         rows.push(Row {
             name: scene_path.display().to_string(),
             triangles: scene.mesh.triangles.len(),
@@ -89,23 +136,10 @@ pub fn run(a: &BenchArgs) -> CliResult {
             gn_ms: Some(gn),
             ..Row::default()
         });
-        print_rows(&rows, a.json);
-        return Ok(());
+        return Ok(rows);
     }
-    let shared = |rel: &str| -> CliResult<PathBuf> {
-        let p = a.data.join(rel);
-        if p.exists() {
-            Ok(p)
-        } else {
-            Err(format!(
-                "{}: not found: the benchmark reads meshes and the real scene from the shared data folder \
-                 (`shared/data`, beside the repository), or from --data DIR",
-                p.display()
-            ))
-        }
-    };
-    let duck = load_mesh(&shared("gltf/Duck/glTF-Binary/Duck.glb")?)?;
-    let engine = load_mesh(&shared("gltf/2CylinderEngine/glTF-Binary/2CylinderEngine.glb")?)?;
+    let duck = load_mesh(&shared(a, "gltf/Duck/glTF-Binary/Duck.glb")?)?;
+    let engine = load_mesh(&shared(a, "gltf/2CylinderEngine/glTF-Binary/2CylinderEngine.glb")?)?;
     let meshes = [
         ("blob500", blob_mesh(12, 25), true),
         ("blob2k", blob_mesh(22, 50), true),
@@ -130,7 +164,7 @@ pub fn run(a: &BenchArgs) -> CliResult {
                 None,
             )
             .map_err(|e| e.to_string())?;
-            let (fwd_bwd, gn) = time_objective(mesh, &s.views(), &s.pose, size, a.sigma, reps)?;
+            let (fwd_bwd, gn) = time_objective(mesh, &s.views(), &s.pose, size, a.sigma, reps, raster)?;
             rows.push(Row {
                 name: name.to_string(),
                 triangles: mesh.triangles.len(),
@@ -142,29 +176,55 @@ pub fn run(a: &BenchArgs) -> CliResult {
             });
         }
     }
-    if !a.no_fit {
-        // The Duck at 256², 4 views.
-        let s = synth_scene(&duck, 4, 256, 256, 11)?;
-        rows.push(fit_row("fit: duck", &duck, s.views(), &s.pose, "256²")?);
-        // The page's bundled example, as scripts/build-examples.sh makes it.
-        let toy = shapes::toy_plane();
-        let s = synth_scene(&toy, 4, 256, 256, 7)?;
-        rows.push(fit_row("fit: bundled example (toy)", &toy, s.views(), &s.pose, "256²")?);
-        // A real 640×480 three-view scene: the LM-O duck, as the page's real example.
-        let real = real_scene(&shared("real/lmo")?)?;
-        let gt = real
-            .ground_truth_pose
-            .ok_or("the imported real scene has no ground truth")?;
-        rows.push(fit_row(
-            "fit: real LM-O duck",
-            &real.mesh,
-            real.views.clone(),
-            &gt,
-            "640×480",
-        )?);
+    Ok(rows)
+}
+
+/// A file of the shared data folder, or an error saying where it should be.
+fn shared(a: &BenchArgs, rel: &str) -> CliResult<PathBuf> {
+    let p = a.data.join(rel);
+    if p.exists() {
+        Ok(p)
+    } else {
+        Err(format!(
+            "{}: not found: the benchmark reads meshes and the real scene from the shared data folder \
+             (`shared/data`, beside the repository), or from --data DIR",
+            p.display()
+        ))
     }
-    print_rows(&rows, a.json);
-    Ok(())
+}
+
+/// The full fits (views in parallel on the pool's threads).
+fn fits(a: &BenchArgs, raster: RasterKind) -> CliResult<Vec<Row>> {
+    let mut rows = Vec::new();
+    let duck = load_mesh(&shared(a, "gltf/Duck/glTF-Binary/Duck.glb")?)?;
+    // The Duck at 256², 4 views.
+    let s = synth_scene(&duck, 4, 256, 256, 11)?;
+    rows.push(fit_row("fit: duck", &duck, s.views(), &s.pose, "256²", raster)?);
+    // The page's bundled example, as scripts/build-examples.sh makes it.
+    let toy = shapes::toy_plane();
+    let s = synth_scene(&toy, 4, 256, 256, 7)?;
+    rows.push(fit_row(
+        "fit: bundled example (toy)",
+        &toy,
+        s.views(),
+        &s.pose,
+        "256²",
+        raster,
+    )?);
+    // A real 640×480 three-view scene: the LM-O duck, as the page's real example.
+    let real = real_scene(&shared(a, "real/lmo")?)?;
+    let gt = real
+        .ground_truth_pose
+        .ok_or("the imported real scene has no ground truth")?;
+    rows.push(fit_row(
+        "fit: real LM-O duck",
+        &real.mesh,
+        real.views.clone(),
+        &gt,
+        "640×480",
+        raster,
+    )?);
+    Ok(rows)
 }
 
 fn synth_scene(mesh: &Mesh, views: usize, w: u32, h: u32, seed: u64) -> CliResult<localisebot::app::synth::SynthScene> {
@@ -200,10 +260,14 @@ fn real_scene(lmo: &Path) -> CliResult<Scene> {
 }
 
 /// A full fit from no initial pose with the default settings.
-fn fit_row(name: &str, mesh: &Mesh, views: Vec<View>, truth: &Pose, size: &str) -> CliResult<Row> {
+fn fit_row(name: &str, mesh: &Mesh, views: Vec<View>, truth: &Pose, size: &str, raster: RasterKind) -> CliResult<Row> {
     let n = views.len();
     let start = Instant::now();
-    let mut est = Estimator::new(mesh.clone(), views, None, FitSettings::default()).map_err(|e| e.to_string())?;
+    let settings = FitSettings {
+        raster,
+        ..FitSettings::default()
+    };
+    let mut est = Estimator::new(mesh.clone(), views, None, settings).map_err(|e| e.to_string())?;
     est.run(usize::MAX).map_err(|e| e.to_string())?;
     let secs = start.elapsed().as_secs_f64();
     let r = est.result(secs, Some(truth));
@@ -229,6 +293,7 @@ fn fit_row(name: &str, mesh: &Mesh, views: Vec<View>, truth: &Pose, size: &str) 
 /// Median milliseconds of one objective evaluation with gradient, and with the
 /// Gauss–Newton model, at a pose slightly off `pose` (as during a fit): the fit's
 /// objective with its default λ1, λ2, every view's whole image at `size`.
+#[allow(clippy::too_many_arguments)]
 fn time_objective(
     mesh: &Mesh,
     views: &[View],
@@ -236,13 +301,16 @@ fn time_objective(
     size: u32,
     sigma: f64,
     reps: usize,
+    raster: RasterKind,
 ) -> CliResult<(f64, f64)> {
     let d = FitSettings::default();
     let settings = ObjectiveSettings {
         soft: SoftSettings { sigma, eps: 1e-4 },
         lambda_iou: d.lambda_iou,
         lambda_contour: d.lambda_contour,
+        raster,
     };
+    let model = RenderMesh::new(mesh.clone());
     let windows: Vec<Window> = views.iter().map(|v| Window::full(v.camera())).collect();
     let mut objective = Objective::new(views, &windows, size, settings).map_err(|e| e.to_string())?;
     let p = Pose {
@@ -262,12 +330,12 @@ fn time_objective(
     };
     let fwd_bwd = median(&mut || {
         objective
-            .value_and_gradient(mesh, &p)
+            .value_and_gradient(&model, &p)
             .map(|e| drop(std::hint::black_box(e)))
     })?;
     let gn = median(&mut || {
         objective
-            .normal_equations(mesh, &p)
+            .normal_equations(&model, &p)
             .map(|e| drop(std::hint::black_box(e)))
     })?;
     Ok((fwd_bwd, gn))
@@ -277,7 +345,8 @@ fn print_rows(rows: &[Row], json: bool) {
     if json {
         for r in rows {
             let mut v = serde_json::json!({
-                "name": r.name, "triangles": r.triangles, "views": r.views, "size": r.size,
+                "name": r.name, "raster": r.raster, "threads": r.threads,
+                "triangles": r.triangles, "views": r.views, "size": r.size,
             });
             let mut put = |k: &str, x: Option<f64>| {
                 if let Some(x) = x {
@@ -296,6 +365,11 @@ fn print_rows(rows: &[Row], json: bool) {
         }
         return;
     }
+    println!(
+        "rasteriser: {}; evaluations on 1 thread, fits on {}",
+        rows.first().map_or("-", |r| r.raster),
+        rows.iter().map(|r| r.threads).max().unwrap_or(1)
+    );
     println!(
         "{:<28} {:>9} {:>5} {:>8} {:>11} {:>8} {:>7} {:>9} {:>7} {:>7}",
         "configuration", "triangles", "views", "size", "fwd+bwd ms", "GN ms", "fit s", "ADD(-S)", "IoU", "verdict"

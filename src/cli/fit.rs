@@ -62,6 +62,28 @@ pub struct FitOptions {
     /// Trust every view: no down-weighting of a view that contradicts the others.
     #[arg(long)]
     pub no_robust: bool,
+    /// The soft rasteriser (default edge).
+    #[arg(long, value_enum)]
+    pub raster: Option<RasterArg>,
+}
+
+/// `--raster`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum RasterArg {
+    /// Silhouette-edge: the hard coverage inside, softness and gradient from the outline edges.
+    Edge,
+    /// SoftRas, the paper's renderer: every triangle's σ-band.
+    Softras,
+}
+
+impl RasterArg {
+    /// The core's rasteriser.
+    pub fn kind(self) -> localisebot::raster::silhouette::RasterKind {
+        match self {
+            RasterArg::Edge => localisebot::raster::silhouette::RasterKind::Edge,
+            RasterArg::Softras => localisebot::raster::silhouette::RasterKind::SoftRas,
+        }
+    }
 }
 
 /// `--window`.
@@ -116,6 +138,9 @@ impl FitOptions {
         }
         if self.no_robust {
             s.robust = false;
+        }
+        if let Some(r) = self.raster {
+            s.raster = r.kind();
         }
         s.validate().map_err(|e| e.to_string())?;
         Ok(s)

@@ -6,6 +6,7 @@
 use super::files::{load_pose, load_scene_file, to_json, CliResult};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::loss::target::Window;
+use localisebot::raster::silhouette::RenderMesh;
 use localisebot::raster::soft::SoftSettings;
 use localisebot::FitSettings;
 use std::path::PathBuf;
@@ -30,6 +31,9 @@ pub struct LossArgs {
     /// Weight λ2 of the contour (chamfer-type mean distance) term (default: the fit's, 1).
     #[arg(long)]
     lambda_contour: Option<f64>,
+    /// The soft rasteriser (default: the fit's, edge).
+    #[arg(long, value_enum)]
+    raster: Option<super::fit::RasterArg>,
 }
 
 /// Runs `loss`.
@@ -55,12 +59,12 @@ pub fn run(a: &LossArgs) -> CliResult {
         },
         lambda_iou: a.lambda_iou.unwrap_or(defaults.lambda_iou),
         lambda_contour: a.lambda_contour.unwrap_or(defaults.lambda_contour),
+        raster: a.raster.map_or(defaults.raster, |r| r.kind()),
     };
     let windows: Vec<Window> = scene.views.iter().map(|v| Window::full(v.camera())).collect();
     let mut objective = Objective::new(&scene.views, &windows, size, settings).map_err(|e| e.to_string())?;
-    let ev = objective
-        .value_and_gradient(&scene.mesh, &pose)
-        .map_err(|e| e.to_string())?;
+    let model = RenderMesh::new(scene.mesh.clone());
+    let ev = objective.value_and_gradient(&model, &pose).map_err(|e| e.to_string())?;
     let out = serde_json::json!({
         "loss": ev.total,
         "gradient": ev.gradient,
@@ -70,6 +74,7 @@ pub fn run(a: &LossArgs) -> CliResult {
         "views": scene.views.iter().zip(&ev.views).map(|(v, l)| serde_json::json!({
             "name": v.name(), "loss": l.total, "iou_loss": l.iou, "contour": l.contour,
         })).collect::<Vec<_>>(),
+        "raster": settings.raster,
         "sigma_px2": a.sigma,
         "size": size,
         "lambda_iou": settings.lambda_iou,

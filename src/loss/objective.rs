@@ -30,8 +30,12 @@ use crate::mesh::Mesh;
 use crate::pose::Pose;
 use crate::raster::hard::{render_bits_into, BitMask};
 use crate::raster::project::{project_mesh, POSE_DIM};
-use crate::raster::soft::{SoftRasterizer, SoftSettings};
+use crate::raster::silhouette::{RasterKind, RenderMesh, SilhouetteRenderer};
+use crate::raster::soft::SoftSettings;
 use crate::view::View;
+#[cfg(not(target_arch = "wasm32"))]
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 /// The objective's settings at one stage.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,6 +46,8 @@ pub struct ObjectiveSettings {
     pub lambda_iou: f64,
     /// λ2, weight of the contour (chamfer) term.
     pub lambda_contour: f64,
+    /// The soft rasteriser.
+    pub raster: RasterKind,
 }
 
 impl ObjectiveSettings {
@@ -113,7 +119,7 @@ pub struct Evaluation {
 #[derive(Debug, Clone)]
 pub struct Objective {
     targets: Vec<ViewTarget>,
-    rasters: Vec<SoftRasterizer>,
+    rasters: Vec<SilhouetteRenderer>,
     weights: Vec<f64>,
     settings: ObjectiveSettings,
     bits: BitMask,
@@ -169,7 +175,7 @@ impl Objective {
             .collect::<Result<Vec<_>>>()?;
         Ok(Objective {
             model_union: targets.iter().map(|t| t.area.max(1.0) + UNION_EPS).collect(),
-            rasters: vec![SoftRasterizer::new(); targets.len()],
+            rasters: vec![SilhouetteRenderer::new(settings.raster); targets.len()],
             weights: vec![1.0; targets.len()],
             targets,
             settings,
@@ -216,122 +222,75 @@ impl Objective {
 
     /// The last render's soft silhouette of view `i` (canvas pixels, row-major).
     pub fn alpha(&self, i: usize) -> &[f64] {
-        &self.rasters[i].silhouette().alpha
+        self.rasters[i].alpha()
     }
 
     fn norm(&self) -> f64 {
         self.weights.iter().sum::<f64>()
     }
 
-    fn view_value(&self, i: usize, inter: f64, union: f64) -> ViewValue {
-        let t = &self.targets[i];
-        let s = &self.settings;
-        let iou = 1.0 - inter / union;
-        let contour = match &t.contour {
-            Some(c) if s.lambda_contour > 0.0 => c.loss(self.alpha(i)),
-            _ => 0.0,
+    /// Evaluates every view (in parallel natively; one after the other in wasm).
+    fn parts(&mut self, mesh: &RenderMesh, pose: &Pose, kind: PartKind) -> Result<Vec<ViewPart>> {
+        let union = self.model_union.clone();
+        self.parts_with(mesh, pose, kind, &union)
+    }
+
+    /// Evaluates every view with the Gauss–Newton model's unions `model_union` (one per view).
+    fn parts_with(
+        &mut self,
+        mesh: &RenderMesh,
+        pose: &Pose,
+        kind: PartKind,
+        model_union: &[f64],
+    ) -> Result<Vec<ViewPart>> {
+        let settings = self.settings;
+        let scale: Vec<f64> = model_union.iter().map(|u| settings.lambda_iou / u).collect();
+        let job = |(i, (raster, target)): (usize, (&mut SilhouetteRenderer, &ViewTarget))| {
+            view_part(raster, target, &settings, mesh, pose, kind, scale[i])
         };
-        ViewValue {
-            total: s.lambda_iou * iou + s.lambda_contour * contour,
-            iou,
-            contour,
-        }
+        #[cfg(not(target_arch = "wasm32"))]
+        let parts: Vec<Result<ViewPart>> = self
+            .rasters
+            .par_iter_mut()
+            .zip(self.targets.par_iter())
+            .enumerate()
+            .map(job)
+            .collect();
+        #[cfg(target_arch = "wasm32")]
+        let parts: Vec<Result<ViewPart>> = self
+            .rasters
+            .iter_mut()
+            .zip(self.targets.iter())
+            .enumerate()
+            .map(job)
+            .collect();
+        parts.into_iter().collect()
     }
 
-    /// The objective at `pose`, without gradient.
-    pub fn value(&mut self, mesh: &Mesh, pose: &Pose) -> Result<Evaluation> {
-        let mut out = Evaluation::default();
-        for i in 0..self.targets.len() {
-            let t = &self.targets[i];
-            let sil = self.rasters[i].render(mesh, pose, &t.camera, &self.settings.soft)?;
-            let (inter, union) = iou_sums(t, &sil.alpha);
-            self.model_union[i] = union;
-            let v = self.view_value(i, inter, union);
-            out.total += self.weights[i] * v.total;
-            out.views.push(v);
-        }
-        out.total /= self.norm();
-        Ok(out)
-    }
-
-    /// The objective at `pose` and its exact 9-gradient, in one fused render-and-
-    /// backward sweep per view.
-    pub fn value_and_gradient(&mut self, mesh: &Mesh, pose: &Pose) -> Result<Evaluation> {
-        let mut out = Evaluation::default();
-        let norm = self.norm();
-        for i in 0..self.targets.len() {
-            let t = &self.targets[i];
-            let (mask, known) = (&t.mask, t.known.as_deref());
-            let cw = t.contour.as_ref().map(|c| c.gradient());
-            // ∂L/∂A = λ1·(−M/U + (1 − M)·I/U²) + λ2·W on known pixels: three fields,
-            // combined once the sums are known.
-            let [g_mask, g_back, g_contour] =
-                self.rasters[i].render_with_gradients(mesh, pose, &t.camera, &self.settings.soft, |p| {
-                    let k = known.map_or(1.0, |k| k[p] as f64);
-                    let m = mask[p] as f64;
-                    [m * k, (1.0 - m) * k, cw.map_or(0.0, |w| w[p])]
-                })?;
-            let (inter, union) = iou_sums(t, &self.rasters[i].silhouette().alpha);
-            self.model_union[i] = union;
-            let v = self.view_value(i, inter, union);
-            let s = &self.settings;
-            let (c_mask, c_back) = (-s.lambda_iou / union, s.lambda_iou * inter / (union * union));
-            let w = self.weights[i] / norm;
-            for k in 0..POSE_DIM {
-                out.gradient[k] += w * (c_mask * g_mask[k] + c_back * g_back[k] + s.lambda_contour * g_contour[k]);
-            }
-            out.total += w * v.total;
-            out.views.push(v);
-        }
-        Ok(out)
-    }
-
-    /// The objective, its exact gradient and its Gauss–Newton curvature model (module
-    /// doc) at `pose`, in one render-and-Jacobian sweep per view.
-    pub fn normal_equations(&mut self, mesh: &Mesh, pose: &Pose) -> Result<(Evaluation, NormalEquations)> {
+    /// Combines the views' parts into the weighted mean, its gradient and its
+    /// Gauss–Newton model.
+    fn combine(&mut self, parts: &[ViewPart]) -> (Evaluation, NormalEquations) {
         let mut ev = Evaluation::default();
         let mut ne = NormalEquations::default();
         let norm = self.norm();
         let (l1, l2) = (self.settings.lambda_iou, self.settings.lambda_contour);
-        for i in 0..self.targets.len() {
-            let t = &self.targets[i];
-            let contour = t.contour.as_ref().filter(|_| l2 > 0.0);
-            let mut g = [[0.0f64; POSE_DIM]; 3];
-            let mut h = [[0.0f64; POSE_DIM]; POSE_DIM];
-            // The IoU weights' 1/U from the view's previous evaluation (the union is a
-            // sum over the whole canvas, known only after the sweep); exact again on a
-            // repeated evaluation at the same pose.
-            let iou_scale = l1 / self.model_union[i];
-            self.rasters[i].render_with_jacobians(mesh, pose, &t.camera, &self.settings.soft, |p, a, j| {
-                if !t.is_known(p) {
-                    return;
-                }
-                let m = t.mask[p] as f64;
-                let f = if m != 0.0 { 0 } else { 1 };
-                for k in 0..POSE_DIM {
-                    g[f][k] += j[k];
-                }
-                // IRLS weight of |A − M|, and the contour's w²/(2ℓ).
-                let mut c = iou_scale * 0.5 / (a - m).abs().max(1e-12);
-                if let Some(ct) = contour {
-                    let w = ct.gradient()[p];
-                    for k in 0..POSE_DIM {
-                        g[2][k] += w * j[k];
-                    }
-                    c += l2 * 0.5 * w * w / ct.pixel_loss(p, a).max(1e-300);
-                }
-                accumulate(&mut h, j, c);
-            })?;
-            let (inter, union) = iou_sums(t, &self.rasters[i].silhouette().alpha);
+        for (i, part) in parts.iter().enumerate() {
+            let (inter, union) = (part.inter, part.union);
             self.model_union[i] = union;
-            let v = self.view_value(i, inter, union);
+            let iou = 1.0 - inter / union;
+            let contour = if l2 > 0.0 { part.contour } else { 0.0 };
+            let v = ViewValue {
+                total: l1 * iou + l2 * contour,
+                iou,
+                contour,
+            };
             let w = self.weights[i] / norm;
             let (c_mask, c_back) = (-l1 / union, l1 * inter / (union * union));
             for a in 0..POSE_DIM {
-                ne.jtr[a] += w * (c_mask * g[0][a] + c_back * g[1][a] + l2 * g[2][a]);
+                ne.jtr[a] += w * (c_mask * part.g[0][a] + c_back * part.g[1][a] + l2 * part.g[2][a]);
                 // Only the upper triangle was accumulated.
-                for (b, v) in ne.jtj[a].iter_mut().enumerate() {
-                    *v += w * if b >= a { h[a][b] } else { h[b][a] };
+                for (b, h) in ne.jtj[a].iter_mut().enumerate() {
+                    *h += w * if b >= a { part.h[a][b] } else { part.h[b][a] };
                 }
             }
             ev.total += w * v.total;
@@ -339,7 +298,72 @@ impl Objective {
         }
         ne.cost = ev.total;
         ev.gradient = ne.jtr;
-        Ok((ev, ne))
+        (ev, ne)
+    }
+
+    /// Each view's soft union at its last evaluation: what a worker evaluating some of
+    /// the views needs for the Gauss–Newton model ([`Objective::view_parts`]).
+    pub fn model_union(&self) -> &[f64] {
+        &self.model_union
+    }
+
+    /// Evaluates every view of this objective at `pose` — for a worker that holds some of
+    /// an estimator's views — with the unions the coordinating objective's
+    /// [`Objective::model_union`] gives for them.
+    ///
+    /// Errors: a `model_union` of another length, or a render's error.
+    pub fn view_parts(
+        &mut self,
+        mesh: &RenderMesh,
+        pose: &Pose,
+        kind: PartKind,
+        model_union: &[f64],
+    ) -> Result<Vec<ViewPart>> {
+        if model_union.len() != self.targets.len() || model_union.iter().any(|u| !(u.is_finite() && *u > 0.0)) {
+            return Err(Error::Settings(format!(
+                "view parts: {} positive unions needed, got {:?}",
+                self.targets.len(),
+                model_union
+            )));
+        }
+        self.parts_with(mesh, pose, kind, model_union)
+    }
+
+    /// Combines every view's part (in view order, as computed by [`Objective::view_parts`]
+    /// here or elsewhere) into the loss, its gradient and its Gauss–Newton model.
+    ///
+    /// Errors: not one part per view.
+    pub fn combine_parts(&mut self, parts: &[ViewPart]) -> Result<(Evaluation, NormalEquations)> {
+        if parts.len() != self.targets.len() {
+            return Err(Error::Settings(format!(
+                "{} view parts for {} views",
+                parts.len(),
+                self.targets.len()
+            )));
+        }
+        Ok(self.combine(parts))
+    }
+
+    /// The objective at `pose`, without gradient.
+    pub fn value(&mut self, mesh: &RenderMesh, pose: &Pose) -> Result<Evaluation> {
+        let parts = self.parts(mesh, pose, PartKind::Value)?;
+        let (mut ev, _) = self.combine(&parts);
+        ev.gradient = [0.0; POSE_DIM];
+        Ok(ev)
+    }
+
+    /// The objective at `pose` and its exact 9-gradient, in one fused render-and-
+    /// backward sweep per view.
+    pub fn value_and_gradient(&mut self, mesh: &RenderMesh, pose: &Pose) -> Result<Evaluation> {
+        let parts = self.parts(mesh, pose, PartKind::Gradient)?;
+        Ok(self.combine(&parts).0)
+    }
+
+    /// The objective, its exact gradient and its Gauss–Newton curvature model (module
+    /// doc) at `pose`, in one render-and-Jacobian sweep per view.
+    pub fn normal_equations(&mut self, mesh: &RenderMesh, pose: &Pose) -> Result<(Evaluation, NormalEquations)> {
+        let parts = self.parts(mesh, pose, PartKind::GaussNewton)?;
+        Ok(self.combine(&parts))
     }
 
     /// Hard IoU per view (over known pixels) of `mesh` at `pose`.
@@ -357,6 +381,102 @@ impl Objective {
         self.bits = bits;
         out
     }
+}
+
+/// What a view's evaluation computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PartKind {
+    /// The loss alone.
+    Value,
+    /// The loss and its gradient (Adam).
+    Gradient,
+    /// The loss, its gradient and its Gauss–Newton model (LM).
+    GaussNewton,
+}
+
+/// One view's share of an evaluation — what a worker computing some views of an
+/// iteration hands back ([`Objective::view_parts`], [`Objective::combine_parts`]): the
+/// IoU's sums, the contour term, the 9-gradients of `Σ M·A`, `Σ (1 − M)·A` and `Σ W·A`
+/// over known pixels (W the contour term's ∂/∂A), and the upper triangle of its
+/// Gauss–Newton curvature.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ViewPart {
+    /// `Σ A·M` over known pixels.
+    pub inter: f64,
+    /// The soft union `Σ (A + M − A·M)` over known pixels (+1e-6).
+    pub union: f64,
+    /// The contour term.
+    pub contour: f64,
+    /// The three field gradients (mask, background, contour).
+    pub g: [[f64; POSE_DIM]; 3],
+    /// The curvature, upper triangle (`h[a][b]`, b ≥ a).
+    pub h: [[f64; POSE_DIM]; POSE_DIM],
+}
+
+/// Evaluates one view; `iou_scale` is λ1/U of the view's previous evaluation (the
+/// Gauss–Newton model's IoU weights).
+fn view_part(
+    raster: &mut SilhouetteRenderer,
+    t: &ViewTarget,
+    s: &ObjectiveSettings,
+    mesh: &RenderMesh,
+    pose: &Pose,
+    kind: PartKind,
+    iou_scale: f64,
+) -> Result<ViewPart> {
+    let mut part = ViewPart {
+        inter: 0.0,
+        union: 0.0,
+        contour: 0.0,
+        g: [[0.0; POSE_DIM]; 3],
+        h: [[0.0; POSE_DIM]; POSE_DIM],
+    };
+    let contour = t.contour.as_ref().filter(|_| s.lambda_contour > 0.0);
+    let (mask, known) = (&t.mask, t.known.as_deref());
+    match kind {
+        PartKind::Value => {
+            raster.render(mesh, pose, &t.camera, &s.soft)?;
+        }
+        PartKind::Gradient => {
+            let cw = contour.map(|c| c.gradient());
+            part.g = raster.render_with_gradients(mesh, pose, &t.camera, &s.soft, |p| {
+                let k = known.map_or(1.0, |k| k[p] as f64);
+                let m = mask[p] as f64;
+                [m * k, (1.0 - m) * k, cw.map_or(0.0, |w| w[p])]
+            })?;
+        }
+        PartKind::GaussNewton => {
+            let (g, h) = (&mut part.g, &mut part.h);
+            let l2 = s.lambda_contour;
+            raster.render_with_jacobians(mesh, pose, &t.camera, &s.soft, |p, a, j| {
+                if !t.is_known(p) {
+                    return;
+                }
+                let m = mask[p] as f64;
+                let f = if m != 0.0 { 0 } else { 1 };
+                for k in 0..POSE_DIM {
+                    g[f][k] += j[k];
+                }
+                // IRLS weight of |A − M|, and the contour's w²/(2ℓ).
+                let mut c = iou_scale * 0.5 / (a - m).abs().max(1e-12);
+                if let Some(ct) = contour {
+                    let w = ct.gradient()[p];
+                    for k in 0..POSE_DIM {
+                        g[2][k] += w * j[k];
+                    }
+                    c += l2 * 0.5 * w * w / ct.pixel_loss(p, a).max(1e-300);
+                }
+                accumulate(h, j, c);
+            })?;
+        }
+    }
+    let alpha = raster.alpha();
+    (part.inter, part.union) = iou_sums(t, alpha);
+    if let Some(c) = contour {
+        part.contour = c.loss(alpha);
+    }
+    Ok(part)
 }
 
 /// `h += c·j jᵀ` on the upper triangle.

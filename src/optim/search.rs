@@ -61,7 +61,7 @@ impl Sampling {
 }
 
 /// A scored candidate.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Candidate {
     /// Its pose after the translation/scale re-fit.
     pub pose: Pose,

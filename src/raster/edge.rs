@@ -12,7 +12,9 @@
 //!
 //! The definition (the tests' naive oracle implements exactly this):
 //!
-//! 1. `C(p) ∈ {0, 1}` is [`crate::raster::hard::render_projected_into`].
+//! 1. `C(p) ∈ {0, 1}` is [`crate::raster::hard::render_projected_into`] (computed
+//!    without the back faces of closed, consistently oriented components, which cover
+//!    nothing more: `EdgeTopology::front_signs`).
 //! 2. A face is *present* when its three vertices are in front of the near plane and
 //!    its doubled projected area exceeds [`DEGENERATE_DOUBLE_AREA`](crate::raster::soft::DEGENERATE_DOUBLE_AREA) px².
 //! 3. An edge is a *candidate outline edge* when it has at least one present face and
@@ -232,7 +234,9 @@ impl EdgeSilhouette {
         self.height = h;
         self.settings = *settings;
         self.vertex_count = n;
-        hard::render_projected_into(proj, triangles, camera, &mut self.coverage);
+        // The back faces of closed, consistently oriented components cover nothing their
+        // front faces do not (topology module doc): skipped.
+        hard::render_projected_culled_into(proj, triangles, camera, &topo.front, &mut self.coverage);
         self.alpha.clear();
         self.alpha.extend(self.coverage.data.iter().map(|&c| f64::from(c)));
         self.records.clear();

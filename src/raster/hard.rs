@@ -64,6 +64,21 @@ pub fn render_projected(proj: &Projected, triangles: &[[u32; 3]], camera: &Camer
 
 /// As [`render_projected`], writing into `out` (resized and cleared, its allocation reused).
 pub fn render_projected_into(proj: &Projected, triangles: &[[u32; 3]], camera: &Camera, out: &mut Mask) {
+    render_projected_culled_into(proj, triangles, camera, &[], out);
+}
+
+/// As [`render_projected_into`], skipping every triangle `f` with `front[f] ≠ 0`
+/// whose projected (snapped) area has the other sign: the back faces of closed,
+/// consistently oriented components, whose silhouette their front faces cover alone
+/// (`raster::edge::EdgeTopology::front_signs`). Triangles crossing the near plane are
+/// always drawn. An empty `front` skips nothing.
+pub fn render_projected_culled_into(
+    proj: &Projected,
+    triangles: &[[u32; 3]],
+    camera: &Camera,
+    front: &[i8],
+    out: &mut Mask,
+) {
     let (w, h) = (camera.width, camera.height);
     out.width = w;
     out.height = h;
@@ -71,7 +86,7 @@ pub fn render_projected_into(proj: &Projected, triangles: &[[u32; 3]], camera: &
     out.data.resize(w as usize * h as usize, 0);
     let data = &mut out.data;
     let stride = w as usize;
-    for_each_span(proj, triangles, camera, &mut |y, x0, x1| {
+    for_each_span_culled(proj, triangles, camera, front, &mut |y, x0, x1| {
         data[y * stride + x0..=y * stride + x1].fill(1);
     });
 }
@@ -133,6 +148,17 @@ fn for_each_span(
     camera: &Camera,
     span: &mut impl FnMut(usize, usize, usize),
 ) {
+    for_each_span_culled(proj, triangles, camera, &[], span)
+}
+
+/// [`for_each_span`], skipping the culled back faces (see [`render_projected_culled_into`]).
+fn for_each_span_culled(
+    proj: &Projected,
+    triangles: &[[u32; 3]],
+    camera: &Camera,
+    front: &[i8],
+    span: &mut impl FnMut(usize, usize, usize),
+) {
     let (w, h) = (camera.width, camera.height);
     if w == 0 || h == 0 {
         return;
@@ -150,10 +176,18 @@ fn for_each_span(
             }
         })
         .collect();
-    for t in triangles {
+    for (f, t) in triangles.iter().enumerate() {
         let [a, b, c] = t.map(|i| i as usize);
         let v = [snapped[a], snapped[b], snapped[c]];
         if v[0][0] != SLOW && v[1][0] != SLOW && v[2][0] != SLOW {
+            if let Some(&keep) = front.get(f) {
+                if keep != 0 {
+                    let area = (v[1][0] - v[0][0]) * (v[2][1] - v[0][1]) - (v[1][1] - v[0][1]) * (v[2][0] - v[0][0]);
+                    if area.signum() as i8 != keep {
+                        continue;
+                    }
+                }
+            }
             triangle_spans(v, w, h, span);
             continue;
         }

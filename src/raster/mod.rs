@@ -1,10 +1,14 @@
-//! Rasterisation: projection of the posed mesh, hard (binary) silhouettes and
-//! soft (SoftRas) silhouettes with their analytic backward pass.
+//! Rasterisation: the projection of the posed mesh (`project`), hard (binary)
+//! silhouettes (`hard`), and soft silhouettes with their analytic backward passes —
+//! the silhouette-edge rasteriser (`edge`, the default) and SoftRas (`tiles`, `soft`,
+//! `soft_backward`) — behind one interface (`silhouette`); `shade` renders synthetic
+//! photographs.
 
 pub mod edge;
 pub mod hard;
 pub mod project;
 pub mod shade;
+pub mod silhouette;
 pub mod soft;
 pub mod soft_backward;
 mod tiles;

@@ -170,6 +170,41 @@ impl PoseProjection {
         [gw.x, gw.y, gw.z, gt.x, gt.y, gt.z, gs.x, gs.y, gs.z]
     }
 
+    /// As [`PoseProjection::pose_gradient`] for a sparse gradient: `(vertex, ∂L/∂(u, v))`
+    /// pairs (each vertex at most once).
+    pub fn pose_gradient_sparse(&self, items: impl Iterator<Item = (usize, DVec2)>) -> [f64; POSE_DIM] {
+        let q = (self.camera_rotation * self.pose.rotation).transpose();
+        let (mut gw, mut gt, mut gs) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+        for (i, g) in items {
+            let (y, j) = (self.scaled[i], &self.jac[i]);
+            let h = q * (j[0] * g.x + j[1] * g.y);
+            gw += y.cross(h);
+            gt += h;
+            gs += y * h;
+        }
+        let gt = self.pose.rotation * gt;
+        [gw.x, gw.y, gw.z, gt.x, gt.y, gt.z, gs.x, gs.y, gs.z]
+    }
+
+    /// `∂(u, v)/∂θ` of vertex `i` (rows u, v; the 9 columns `[ω, t, ls]` in lane pairs,
+    /// the 10th zero).
+    #[inline]
+    pub fn vertex_pose_jacobian(&self, i: usize) -> [[f64x2; 5]; 2] {
+        let m = self.camera_rotation * self.pose.rotation;
+        let (y, j) = (self.scaled[i], &self.jac[i]);
+        let mut rows = [[0.0; 10]; 2];
+        for k in 0..3 {
+            let mut e = DVec3::ZERO;
+            e[k] = 1.0;
+            let cols = [m * e.cross(y), self.camera_rotation * e, m * (e * y)];
+            for (g, col) in cols.iter().enumerate() {
+                rows[0][3 * g + k] = j[0].dot(*col);
+                rows[1][3 * g + k] = j[1].dot(*col);
+            }
+        }
+        rows.map(|r| std::array::from_fn(|c| f64x2::new([r[2 * c], r[2 * c + 1]])))
+    }
+
     /// `∂(u, v)/∂θ` of every vertex (rows u, v; the 9 columns `[ω, t, ls]` in lane
     /// pairs, the 10th zero), written into `out`.
     pub fn vertex_pose_jacobians(&self, out: &mut Vec<[[f64x2; 5]; 2]>) {

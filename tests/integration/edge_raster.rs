@@ -786,3 +786,55 @@ fn edge_gradient_through_the_pose_matches_central_differences() {
         );
     }
 }
+
+#[test]
+fn closed_meshes_skip_their_back_faces_yet_cover_the_same_pixels() {
+    use localisebot::app::shapes::toy_plane;
+    let meshes = [
+        ("duck", duck()),
+        ("blob", blob_mesh(22, 50)),
+        ("toy", toy_plane()),
+        ("cube", localisebot::app::shapes::cube_mesh(1.0)),
+    ];
+    for (label, mesh) in &meshes {
+        let topo = EdgeTopology::from_mesh(mesh);
+        let culled = topo.front_signs().iter().filter(|&&s| s != 0).count();
+        assert_eq!(culled, mesh.triangles.len(), "{label}: a closed, oriented mesh");
+        let b = mesh.bounds().unwrap();
+        let (c, r) = (b.centre(), b.size().length() * 0.5);
+        let (mut same, mut skipped) = (0, 0usize);
+        for k in 0..12 {
+            let dir = DVec3::new((k as f64 * 1.3).sin(), (k as f64 * 0.7).cos(), (k as f64 * 2.1).sin()).normalize();
+            let cam = Camera::look_at(c + dir * r * 3.0, c, DVec3::Y, 96, 80, 90.0 + 7.0 * k as f64);
+            let pose = Pose {
+                rotation: so3::exp(DVec3::new(0.1 * k as f64, -0.2, 0.05)),
+                ..Pose::IDENTITY
+            };
+            let proj = project_mesh(mesh, &pose, &cam);
+            let all = hard::render_projected(&proj, &mesh.triangles, &cam);
+            let mut front = Mask::empty(0, 0);
+            hard::render_projected_culled_into(&proj, &mesh.triangles, &cam, topo.front_signs(), &mut front);
+            same += usize::from(all == front);
+            // About half the faces face away from any camera.
+            let back = mesh
+                .triangles
+                .iter()
+                .zip(topo.front_signs())
+                .filter(|(t, &s)| {
+                    let [a, b, c] = t.map(|i| proj.uv[i as usize]);
+                    ((b - a).perp_dot(c - a)).signum() as i8 != s
+                })
+                .count();
+            skipped += back;
+        }
+        assert_eq!(same, 12, "{label}: culled coverage differs");
+        assert!(
+            skipped > 12 * mesh.triangles.len() / 4,
+            "{label}: {skipped} back faces skipped"
+        );
+    }
+    // Open or inconsistently wound meshes are never culled.
+    let mut open = cube();
+    open.triangles.pop();
+    assert!(EdgeTopology::from_mesh(&open).front_signs().iter().all(|&s| s == 0));
+}

@@ -200,6 +200,7 @@ fn the_search_ranks_the_true_orientation_first_and_refits_translation_and_scale(
             soft: Default::default(),
             lambda_iou: 1.0,
             lambda_contour: 0.0,
+            raster: Default::default(),
         };
         let objective = Objective::new(&views, &windows, 64, settings).unwrap();
         let centre = m.bounds().unwrap().centre();
@@ -352,4 +353,55 @@ fn the_contour_weight_changes_what_the_default_optimiser_minimises() {
     for p in [p0, p1] {
         assert!(pose_errors(&m, &p, &s.pose).add_rel < 0.02);
     }
+}
+
+#[test]
+fn shards_computing_the_views_elsewhere_give_the_same_fit() {
+    use localisebot::{Request, Response, Shard};
+    let (m, s) = blob_scene(3, 17);
+    let settings = FitSettings::default();
+    let mut local = Estimator::new(m.clone(), s.views(), None, settings.clone()).unwrap();
+    local.run(100_000).unwrap();
+    // Two shards: views {0, 2} and {1}; search batches split between them.
+    let mut shards = [
+        Shard::new(m.clone(), s.views(), vec![0, 2], settings.clone()).unwrap(),
+        Shard::new(m.clone(), s.views(), vec![1], settings.clone()).unwrap(),
+    ];
+    let mut pooled = Estimator::new(m.clone(), s.views(), None, settings).unwrap();
+    let (mut searches, mut evaluations) = (0, 0);
+    while let Some(request) = pooled.request() {
+        let responses: Vec<Response> = match &request {
+            Request::Search { .. } => {
+                searches += 1;
+                request
+                    .split(2)
+                    .iter()
+                    .zip(shards.iter_mut())
+                    .map(|(r, sh)| sh.work(r).unwrap())
+                    .collect()
+            }
+            Request::Evaluate { .. } => {
+                evaluations += 1;
+                shards.iter_mut().map(|sh| sh.work(&request).unwrap()).collect()
+            }
+        };
+        pooled.respond(responses).unwrap();
+    }
+    assert!(
+        searches > 10 && evaluations > 30,
+        "{searches} search batches, {evaluations} evaluations"
+    );
+    assert!(pooled.is_done());
+    assert_eq!(pooled.pose(), local.pose(), "bit for bit the same pose");
+    assert_eq!(pooled.progress().iteration, local.progress().iteration);
+    // Wrong answers are refused, not trusted.
+    let mut est = Estimator::new(m.clone(), s.views(), None, FitSettings::default()).unwrap();
+    let r = est.request().unwrap();
+    let short = Response::Candidates {
+        first: 0,
+        candidates: vec![],
+    };
+    assert!(est.respond(vec![short]).is_err());
+    let part = shards[1].work(&r.split(1)[0]);
+    assert!(matches!(part, Ok(Response::Candidates { .. })));
 }

@@ -1,17 +1,18 @@
-//! The production objective (`loss::objective::Objective`, what the fit descends):
-//! the PyTorch3D reference case (silhouettes, IoU losses, gradient), the exact
-//! gradient of λ1·IoU + λ2·contour against central differences (whole images,
-//! object windows, ignored pixels), the Gauss–Newton model against its definition
-//! with a finite-difference Jacobian, the loss along a path to the true pose, and
-//! (printed, not asserted) timings.
+//! The production objective (`loss::objective::Objective`, what the fit descends),
+//! with both soft rasterisers: the PyTorch3D reference case (SoftRas: silhouettes, IoU
+//! losses, gradient), the exact gradient of λ1·IoU + λ2·contour against central
+//! differences (whole images, object windows, ignored pixels), the Gauss–Newton model
+//! against its definition with a finite-difference Jacobian, the loss along a path to
+//! the true pose, and (printed, not asserted) timings.
 
 use crate::{data, reference};
 use glam::DVec3;
 use localisebot::app::synth::{blob_mesh, synthesize, SynthSettings};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::loss::target::{Window, WindowMode};
+use localisebot::raster::silhouette::{RasterKind, RenderMesh};
 use localisebot::raster::soft::SoftSettings;
-use localisebot::{so3, Mask, Mesh, Pose, Scene, View};
+use localisebot::{so3, Mask, Pose, Scene, View};
 
 fn load_case(size: u32) -> (Scene, Pose) {
     let dir = reference(&format!("pytorch3d-case1/scene{size}"));
@@ -51,12 +52,15 @@ fn rel_err(analytic: &[f64], fd: &[f64]) -> f64 {
     analytic.iter().zip(fd).fold(0.0f64, |m, (a, f)| m.max((a - f).abs())) / scale
 }
 
-fn settings(sigma: f64, lambda_iou: f64, lambda_contour: f64) -> ObjectiveSettings {
+const RASTERS: [RasterKind; 2] = [RasterKind::Edge, RasterKind::SoftRas];
+
+fn settings(sigma: f64, lambda_iou: f64, lambda_contour: f64, raster: RasterKind) -> ObjectiveSettings {
     ObjectiveSettings {
         // ε tiny: the cut-off's jump of size ε in A would spoil finite differences.
         soft: SoftSettings { sigma, eps: 1e-12 },
         lambda_iou,
         lambda_contour,
+        raster,
     }
 }
 
@@ -64,7 +68,7 @@ fn full(views: &[View]) -> Vec<Window> {
     views.iter().map(|v| Window::full(v.camera())).collect()
 }
 
-fn fd_gradient(o: &mut Objective, mesh: &Mesh, pose: &Pose, h: f64) -> Vec<f64> {
+fn fd_gradient(o: &mut Objective, mesh: &RenderMesh, pose: &Pose, h: f64) -> Vec<f64> {
     (0..9)
         .map(|k| {
             let mut th = [0.0; 9];
@@ -89,9 +93,11 @@ fn objective_matches_the_pytorch3d_reference() {
             soft: SoftSettings::from_ndc(1e-4, size, size),
             lambda_iou: 1.0,
             lambda_contour: 0.0,
+            raster: RasterKind::SoftRas,
         };
         let mut o = Objective::new(&scene.views, &full(&scene.views), size, s).unwrap();
-        let ev = o.value_and_gradient(&scene.mesh, &init).unwrap();
+        let model = RenderMesh::new(scene.mesh.clone());
+        let ev = o.value_and_gradient(&model, &init).unwrap();
         let (mut worst_a, mut worst_l) = (0.0f64, 0.0f64);
         for i in 0..scene.views.len() {
             let want = read_f32(size, i);
@@ -124,7 +130,7 @@ fn objective_matches_the_pytorch3d_reference() {
         assert!(worst_l < 1e-4 && (ev.total - want_mean).abs() < 1e-4, "losses");
         assert!(ge < 1e-3, "gradient");
         // The Gauss–Newton path computes the same loss and gradient.
-        let (ev2, ne) = o.normal_equations(&scene.mesh, &init).unwrap();
+        let (ev2, ne) = o.normal_equations(&model, &init).unwrap();
         assert!((ev2.total - ev.total).abs() < 1e-12 && (ne.cost - ev.total).abs() < 1e-12);
         assert!(rel_err(&ev.gradient, &ne.jtr) < 1e-9, "{:?}\n{:?}", ev.gradient, ne.jtr);
     }
@@ -133,7 +139,7 @@ fn objective_matches_the_pytorch3d_reference() {
 // ---------------------------------------------------------------- gradients
 
 /// A small synthetic scene: the blob in two views, and a pose off the truth.
-fn small_scene(width: u32, height: u32) -> (Mesh, Vec<View>, Pose) {
+fn small_scene(width: u32, height: u32) -> (RenderMesh, Vec<View>, Pose) {
     let mesh = blob_mesh(8, 12);
     let s = synthesize(
         &mesh,
@@ -148,7 +154,7 @@ fn small_scene(width: u32, height: u32) -> (Mesh, Vec<View>, Pose) {
     )
     .unwrap();
     let off = perturb(&s.pose, &[0.05, -0.08, 0.03, 0.04, -0.03, 0.02, 0.05, -0.05, 0.02]);
-    (mesh, s.views(), off)
+    (RenderMesh::new(mesh), s.views(), off)
 }
 
 /// The views with an ignore mask over a block of the first view's object.
@@ -184,25 +190,30 @@ fn with_ignored_block(views: &[View]) -> Vec<View> {
 fn objective_gradient_matches_central_differences() {
     let (mesh, views, pose) = small_scene(40, 32);
     let ignored = with_ignored_block(&views);
-    for (label, views, mode, res) in [
-        ("whole images", &views, WindowMode::Full, 40),
-        ("object windows", &views, WindowMode::Object { margin: 0.3 }, 24),
-        ("ignored pixels", &ignored, WindowMode::Object { margin: 0.3 }, 24),
-    ] {
-        for (l1, l2) in [(1.0, 0.0), (1.0, 0.7), (0.0, 1.0)] {
-            let windows: Vec<Window> = views.iter().map(|v| Window::for_view(v, mode)).collect();
-            let mut o = Objective::new(views, &windows, res, settings(1.5, l1, l2)).unwrap();
-            o.set_weights(&[1.0, 0.4]).unwrap();
-            let ev = o.value_and_gradient(&mesh, &pose).unwrap();
-            let fd = fd_gradient(&mut o, &mesh, &pose, 1e-6);
-            let e = rel_err(&ev.gradient, &fd);
-            println!(
-                "{label}, λ = ({l1}, {l2}): loss {:.6}, gradient relative error {e:.2e}",
-                ev.total
-            );
-            assert!(e < 1e-5, "{label} λ=({l1},{l2}): {:?}\n{fd:?}", ev.gradient);
-            let (_, ne) = o.normal_equations(&mesh, &pose).unwrap();
-            assert!(rel_err(&ev.gradient, &ne.jtr) < 1e-9, "{label}: the two paths differ");
+    for raster in RASTERS {
+        for (label, views, mode, res) in [
+            ("whole images", &views, WindowMode::Full, 40),
+            ("object windows", &views, WindowMode::Object { margin: 0.3 }, 24),
+            ("ignored pixels", &ignored, WindowMode::Object { margin: 0.3 }, 24),
+        ] {
+            for (l1, l2) in [(1.0, 0.0), (1.0, 0.7), (0.0, 1.0)] {
+                let windows: Vec<Window> = views.iter().map(|v| Window::for_view(v, mode)).collect();
+                let mut o = Objective::new(views, &windows, res, settings(1.5, l1, l2, raster)).unwrap();
+                o.set_weights(&[1.0, 0.4]).unwrap();
+                let ev = o.value_and_gradient(&mesh, &pose).unwrap();
+                let fd = fd_gradient(&mut o, &mesh, &pose, 1e-6);
+                let e = rel_err(&ev.gradient, &fd);
+                println!(
+                    "{raster:?}, {label}, λ = ({l1}, {l2}): loss {:.6}, gradient relative error {e:.2e}",
+                    ev.total
+                );
+                assert!(e < 1e-5, "{raster:?} {label} λ=({l1},{l2}): {:?}\n{fd:?}", ev.gradient);
+                let (_, ne) = o.normal_equations(&mesh, &pose).unwrap();
+                assert!(
+                    rel_err(&ev.gradient, &ne.jtr) < 1e-9,
+                    "{raster:?} {label}: the two paths differ"
+                );
+            }
         }
     }
 }
@@ -230,14 +241,21 @@ fn ignored_pixels_count_in_no_term() {
     .unwrap();
     let a = vec![ignored[0].clone()];
     let b = vec![other];
-    let s = settings(1.0, 1.0, 0.5);
-    let mut oa = Objective::new(&a, &full(&a), 40, s).unwrap();
-    let mut ob = Objective::new(&b, &full(&b), 40, s).unwrap();
-    let (la, lb) = (oa.value(&mesh, &pose).unwrap(), ob.value(&mesh, &pose).unwrap());
-    assert!((la.total - lb.total).abs() < 1e-12, "{} vs {}", la.total, lb.total);
-    // And without the ignore mask they differ.
-    let mut oc = Objective::new(&views[..1], &full(&views[..1]), 40, s).unwrap();
-    assert!((oc.value(&mesh, &pose).unwrap().total - la.total).abs() > 1e-4);
+    for raster in RASTERS {
+        let s = settings(1.0, 1.0, 0.5, raster);
+        let mut oa = Objective::new(&a, &full(&a), 40, s).unwrap();
+        let mut ob = Objective::new(&b, &full(&b), 40, s).unwrap();
+        let (la, lb) = (oa.value(&mesh, &pose).unwrap(), ob.value(&mesh, &pose).unwrap());
+        assert!(
+            (la.total - lb.total).abs() < 1e-12,
+            "{raster:?}: {} vs {}",
+            la.total,
+            lb.total
+        );
+        // And without the ignore mask they differ.
+        let mut oc = Objective::new(&views[..1], &full(&views[..1]), 40, s).unwrap();
+        assert!((oc.value(&mesh, &pose).unwrap().total - la.total).abs() > 1e-4);
+    }
 }
 
 #[test]
@@ -248,62 +266,64 @@ fn gauss_newton_model_matches_its_definition() {
     let views = with_ignored_block(&views);
     let (l1, l2) = (1.0, 0.6);
     let windows: Vec<Window> = views.iter().map(|v| Window::full(v.camera())).collect();
-    let mut o = Objective::new(&views, &windows, 36, settings(1.2, l1, l2)).unwrap();
-    // Twice: the IoU weights' 1/U is that of the previous evaluation, here the same pose.
-    o.normal_equations(&mesh, &pose).unwrap();
-    let (_, ne) = o.normal_equations(&mesh, &pose).unwrap();
-    let h = 1e-6;
-    let n = views.len() as f64;
-    let mut want = [[0.0f64; 9]; 9];
-    for v in 0..views.len() {
-        o.value(&mesh, &pose).unwrap();
-        let alpha = o.alpha(v).to_vec();
-        let t = o.targets()[v].clone();
-        let cols: Vec<Vec<f64>> = (0..9)
-            .map(|k| {
-                let mut th = [0.0; 9];
-                th[k] = h;
-                o.value(&mesh, &perturb(&pose, &th)).unwrap();
-                let p = o.alpha(v).to_vec();
-                th[k] = -h;
-                o.value(&mesh, &perturb(&pose, &th)).unwrap();
-                let m = o.alpha(v);
-                p.iter().zip(m).map(|(a, b)| (a - b) / (2.0 * h)).collect()
-            })
-            .collect();
-        let known = |p: usize| t.is_known(p);
-        let (mut inter, mut sum_a) = (0.0, 0.0);
-        for (p, &a) in alpha.iter().enumerate() {
-            if known(p) {
-                sum_a += a;
-                inter += a * t.mask[p] as f64;
+    for raster in RASTERS {
+        let mut o = Objective::new(&views, &windows, 36, settings(1.2, l1, l2, raster)).unwrap();
+        // Twice: the IoU weights' 1/U is that of the previous evaluation, here the same pose.
+        o.normal_equations(&mesh, &pose).unwrap();
+        let (_, ne) = o.normal_equations(&mesh, &pose).unwrap();
+        let h = 1e-6;
+        let n = views.len() as f64;
+        let mut want = [[0.0f64; 9]; 9];
+        for v in 0..views.len() {
+            o.value(&mesh, &pose).unwrap();
+            let alpha = o.alpha(v).to_vec();
+            let t = o.targets()[v].clone();
+            let cols: Vec<Vec<f64>> = (0..9)
+                .map(|k| {
+                    let mut th = [0.0; 9];
+                    th[k] = h;
+                    o.value(&mesh, &perturb(&pose, &th)).unwrap();
+                    let p = o.alpha(v).to_vec();
+                    th[k] = -h;
+                    o.value(&mesh, &perturb(&pose, &th)).unwrap();
+                    let m = o.alpha(v);
+                    p.iter().zip(m).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+                })
+                .collect();
+            let known = |p: usize| t.is_known(p);
+            let (mut inter, mut sum_a) = (0.0, 0.0);
+            for (p, &a) in alpha.iter().enumerate() {
+                if known(p) {
+                    sum_a += a;
+                    inter += a * t.mask[p] as f64;
+                }
             }
-        }
-        let union = sum_a + t.area - inter + 1e-6;
-        let contour = t.contour.as_ref().unwrap();
-        for p in 0..alpha.len() {
-            let jp: Vec<f64> = (0..9).map(|k| cols[k][p]).collect();
-            if !known(p) || jp.iter().all(|j| j.abs() < 1e-14) {
-                continue;
-            }
-            let a = alpha[p];
-            let m = t.mask[p] as f64;
-            let w = contour.gradient()[p];
-            let c = l1 / (2.0 * union * (a - m).abs().max(1e-12)) + l2 * w * w / (2.0 * contour.pixel_loss(p, a));
-            for i in 0..9 {
-                for j in 0..9 {
-                    want[i][j] += c * jp[i] * jp[j] / n;
+            let union = sum_a + t.area - inter + 1e-6;
+            let contour = t.contour.as_ref().unwrap();
+            for p in 0..alpha.len() {
+                let jp: Vec<f64> = (0..9).map(|k| cols[k][p]).collect();
+                if !known(p) || jp.iter().all(|j| j.abs() < 1e-14) {
+                    continue;
+                }
+                let a = alpha[p];
+                let m = t.mask[p] as f64;
+                let w = contour.gradient()[p];
+                let c = l1 / (2.0 * union * (a - m).abs().max(1e-12)) + l2 * w * w / (2.0 * contour.pixel_loss(p, a));
+                for i in 0..9 {
+                    for j in 0..9 {
+                        want[i][j] += c * jp[i] * jp[j] / n;
+                    }
                 }
             }
         }
-    }
-    let got: Vec<f64> = ne.jtj.iter().flatten().copied().collect();
-    let want: Vec<f64> = want.iter().flatten().copied().collect();
-    let e = rel_err(&got, &want);
-    println!("Gauss–Newton curvature: relative error {e:.2e}");
-    assert!(e < 1e-4, "{got:?}\n{want:?}");
-    for i in 0..9 {
-        assert!(ne.jtj[i][i] > 0.0);
+        let got: Vec<f64> = ne.jtj.iter().flatten().copied().collect();
+        let want: Vec<f64> = want.iter().flatten().copied().collect();
+        let e = rel_err(&got, &want);
+        println!("{raster:?}: Gauss–Newton curvature: relative error {e:.2e}");
+        assert!(e < 1e-4, "{raster:?}: {got:?}\n{want:?}");
+        for i in 0..9 {
+            assert!(ne.jtj[i][i] > 0.0);
+        }
     }
 }
 
@@ -313,12 +333,18 @@ fn gauss_newton_model_matches_its_definition() {
 fn objective_falls_along_the_path_to_the_true_pose() {
     let (scene, init) = load_case(128);
     let gt = scene.ground_truth_pose.unwrap();
-    let s = ObjectiveSettings {
-        soft: SoftSettings::from_ndc(1e-4, 128, 128),
-        lambda_iou: 1.0,
-        lambda_contour: 1.0,
-    };
-    for mode in [WindowMode::Full, WindowMode::Object { margin: 0.3 }] {
+    let model = RenderMesh::new(scene.mesh.clone());
+    for (mode, raster) in [
+        (WindowMode::Full, RasterKind::SoftRas),
+        (WindowMode::Object { margin: 0.3 }, RasterKind::SoftRas),
+        (WindowMode::Object { margin: 0.3 }, RasterKind::Edge),
+    ] {
+        let s = ObjectiveSettings {
+            soft: SoftSettings::from_ndc(1e-4, 128, 128),
+            lambda_iou: 1.0,
+            lambda_contour: 1.0,
+            raster,
+        };
         let windows: Vec<Window> = scene.views.iter().map(|v| Window::for_view(v, mode)).collect();
         let mut o = Objective::new(&scene.views, &windows, 128, s).unwrap();
         let w = so3::log(init.rotation.transpose() * gt.rotation);
@@ -332,12 +358,12 @@ fn objective_falls_along_the_path_to_the_true_pose() {
                 translation: init.translation.lerp(gt.translation, a),
                 scale: ls.map(f64::exp),
             };
-            let ev = o.value(&scene.mesh, &pose).unwrap();
+            let ev = o.value(&model, &pose).unwrap();
             let iou = ev.views.iter().map(|v| v.iou).sum::<f64>() / 4.0;
             let contour = ev.views.iter().map(|v| v.contour).sum::<f64>() / 4.0;
-            println!("{mode:?} path {a:.1}: IoU loss {iou:.5}, contour {contour:.6}");
+            println!("{mode:?} {raster:?} path {a:.1}: IoU loss {iou:.5}, contour {contour:.6}");
             if let Some((i0, c0)) = last {
-                assert!(iou < i0 && contour < c0, "{mode:?} at {a}");
+                assert!(iou < i0 && contour < c0, "{mode:?} {raster:?} at {a}");
             }
             last = Some((iou, contour));
         }
@@ -371,11 +397,14 @@ fn objective_timings() {
     .unwrap();
     let duck_views = s.views();
     let near = perturb(&s.pose, &[0.02, 0.01, -0.02, 0.01, 0.0, 0.01, 0.01, 0.0, -0.01]);
-    for (label, mesh, views, pose) in [
-        ("blob", &scene.mesh, &scene.views, init),
-        ("Duck", &duck, &duck_views, near),
+    let (blob, duck) = (RenderMesh::new(scene.mesh.clone()), RenderMesh::new(duck));
+    for (label, mesh, views, pose, raster) in [
+        ("blob", &blob, &scene.views, init, RasterKind::SoftRas),
+        ("blob", &blob, &scene.views, init, RasterKind::Edge),
+        ("Duck", &duck, &duck_views, near, RasterKind::SoftRas),
+        ("Duck", &duck, &duck_views, near, RasterKind::Edge),
     ] {
-        let mut o = Objective::new(views, &full(views), 128, settings(0.4, 1.0, 0.1)).unwrap();
+        let mut o = Objective::new(views, &full(views), 128, settings(0.4, 1.0, 0.1, raster)).unwrap();
         let n = 10;
         let mut best = [f64::MAX; 3];
         for _ in 0..n {
@@ -392,8 +421,8 @@ fn objective_timings() {
             best = [best[0].min(t1), best[1].min(t2), best[2].min(t3)];
         }
         println!(
-            "TIMING {label}: {} tris, {} views 128²: value {:.2} ms, value+gradient {:.2} ms, Gauss–Newton {:.2} ms",
-            mesh.triangles.len(),
+            "TIMING {label} {raster:?}: {} tris, {} views 128²: value {:.2} ms, value+gradient {:.2} ms, Gauss–Newton {:.2} ms",
+            mesh.mesh.triangles.len(),
             views.len(),
             best[0] * 1e3,
             best[1] * 1e3,

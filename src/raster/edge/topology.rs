@@ -10,6 +10,16 @@
 //! welded. A welded vertex is represented by its smallest original index, and that
 //! index is what an edge stores for each end (all copies project to the same pixel, so
 //! any copy serves for gradients).
+//!
+//! Closed components: faces connected through edges form components; a component in
+//! which every edge has exactly two faces running through it in opposite directions is
+//! a closed, consistently oriented surface. Its projection is covered by its
+//! front-facing faces alone (every ray through it meets a front face first), so the
+//! hard coverage may skip its back faces: [`EdgeTopology::front_signs`] gives, per face,
+//! the sign of the projected (image-space) area of a front-facing face of its component
+//! — −1 when the component's signed volume is positive (outward winding; in OpenCV
+//! image coordinates, y down, a face turned to the camera projects clockwise) and +1
+//! when negative — or 0 for faces of open or inconsistent components (never skipped).
 
 use glam::DVec3;
 
@@ -40,6 +50,9 @@ pub struct EdgeTopology {
     /// `incidences[start[e]..start[e + 1]]` are edge e's faces, by increasing face index.
     pub(crate) start: Vec<u32>,
     pub(crate) incidences: Vec<Incidence>,
+    /// Per face, the projected-area sign of a front-facing face of its closed,
+    /// consistently oriented component, or 0 (module doc).
+    pub(crate) front: Vec<i8>,
 }
 
 impl EdgeTopology {
@@ -70,6 +83,7 @@ impl EdgeTopology {
             ends: Vec::new(),
             start: vec![0],
             incidences: Vec::with_capacity(half.len()),
+            front: Vec::new(),
         };
         for (i, &(a, b, face, forward)) in half.iter().enumerate() {
             if i > 0 && (half[i - 1].0, half[i - 1].1) != (a, b) {
@@ -83,7 +97,14 @@ impl EdgeTopology {
         if !half.is_empty() {
             topo.start.push(topo.incidences.len() as u32);
         }
+        topo.front = front_signs(&topo, positions, triangles);
         topo
+    }
+
+    /// Per face, the projected-area sign meaning "front-facing" for faces of closed,
+    /// consistently oriented components, 0 for the others (module doc).
+    pub fn front_signs(&self) -> &[i8] {
+        &self.front
     }
 
     /// The topology of a [`Mesh`](crate::Mesh).
@@ -121,6 +142,71 @@ impl EdgeTopology {
     pub(crate) fn incidences(&self, e: usize) -> &[Incidence] {
         &self.incidences[self.start[e] as usize..self.start[e + 1] as usize]
     }
+}
+
+/// The front sign of every face (see [`EdgeTopology::front_signs`]): components by
+/// union-find over shared edges; a component is closed and oriented when each of its
+/// edges has exactly two faces, one running forward and one backward.
+fn front_signs(topo: &EdgeTopology, positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<i8> {
+    let nf = triangles.len();
+    let mut parent: Vec<u32> = (0..nf as u32).collect();
+    fn root(parent: &mut [u32], mut f: u32) -> u32 {
+        while parent[f as usize] != f {
+            let p = parent[f as usize];
+            parent[f as usize] = parent[p as usize];
+            f = p;
+        }
+        f
+    }
+    let mut bad = vec![false; nf];
+    for e in 0..topo.ends.len() {
+        let inc = topo.incidences(e);
+        let ok = inc.len() == 2 && inc[0].forward != inc[1].forward && inc[0].face != inc[1].face;
+        if let [first, rest @ ..] = inc {
+            for i in rest {
+                let (a, b) = (root(&mut parent, first.face), root(&mut parent, i.face));
+                if a != b {
+                    parent[a as usize] = b;
+                }
+            }
+        }
+        if !ok {
+            for i in inc {
+                bad[i.face as usize] = true;
+            }
+        }
+    }
+    // A face none of whose edges is listed (degenerate, or beyond the vertices) is bad.
+    let mut seen = vec![false; nf];
+    for i in &topo.incidences {
+        seen[i.face as usize] = true;
+    }
+    let n = positions.len();
+    let mut comp_bad = vec![false; nf];
+    let mut volume = vec![0.0f64; nf];
+    for f in 0..nf {
+        let r = root(&mut parent, f as u32) as usize;
+        let t = triangles[f];
+        if bad[f] || !seen[f] || t.iter().any(|&i| i as usize >= n) {
+            comp_bad[r] = true;
+            continue;
+        }
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        volume[r] += a.dot(b.cross(c));
+    }
+    (0..nf)
+        .map(|f| {
+            let r = root(&mut parent, f as u32) as usize;
+            let v = volume[r];
+            if comp_bad[r] || !v.is_finite() || v == 0.0 {
+                0
+            } else if v > 0.0 {
+                -1
+            } else {
+                1
+            }
+        })
+        .collect()
 }
 
 /// Per vertex, the smallest original index of the vertices welded with it.
@@ -209,6 +295,19 @@ mod tests {
             let inc = t.incidences(e);
             assert_ne!(inc[0].forward, inc[1].forward);
         }
+        // Closed and wound outwards: a front face projects with negative area.
+        assert!(t.front_signs().iter().all(|&s| s == -1));
+        // Inwards: positive; with one face flipped: not oriented, nothing is culled.
+        let inward: Vec<[u32; 3]> = tris.iter().map(|t| [t[0], t[2], t[1]]).collect();
+        assert!(EdgeTopology::new(&pos, &inward).front_signs().iter().all(|&s| s == 1));
+        let mut flipped = tris.clone();
+        flipped[3] = [flipped[3][0], flipped[3][2], flipped[3][1]];
+        assert!(EdgeTopology::new(&pos, &flipped).front_signs().iter().all(|&s| s == 0));
+        // An open mesh (a face removed) is never culled either.
+        assert!(EdgeTopology::new(&pos, &tris[1..])
+            .front_signs()
+            .iter()
+            .all(|&s| s == 0));
     }
 
     #[test]

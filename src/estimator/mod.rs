@@ -10,181 +10,33 @@
 //! `λ1·IoU + λ2·contour` with Levenberg–Marquardt (its Gauss–Newton model) or Adam.
 
 use crate::error::{Error, Result};
-use crate::loss::objective::{Objective, ObjectiveSettings};
-use crate::loss::target::{Window, WindowMode};
+use crate::loss::objective::{Objective, PartKind, ViewPart};
+use crate::loss::target::Window;
 use crate::mask::Mask;
 use crate::mesh::Mesh;
 use crate::metrics;
-use crate::optim::adam::{Adam, AdamSettings};
-use crate::optim::lm::{self, Free, Lm};
-use crate::optim::schedule::{Optimiser, StageSettings};
-use crate::optim::search::{self, Candidate, SearchSettings};
+use crate::optim::adam::Adam;
+use crate::optim::lm::{self, Lm};
+use crate::optim::schedule::Optimiser;
+use crate::optim::search::{self, Candidate};
 use crate::optim::{init, params};
 use crate::pose::Pose;
 use crate::raster::hard::{self, BitMask};
-use crate::raster::soft::SoftSettings;
-use crate::verdict::{self, Judgement, Verdict, VerdictThresholds};
+use crate::raster::silhouette::RenderMesh;
+use crate::verdict::{self, Judgement, Verdict};
 use crate::view::View;
 use glam::{DMat3, DVec3};
-use serde::{Deserialize, Serialize};
 
-/// How the scale is fitted.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ScaleMode {
-    /// Per-axis scale (9-DoF; the default).
-    Anisotropic,
-    /// One scale for all axes (7-DoF).
-    Isotropic,
-    /// The CAD model is to scale: the scale stays at the initial value (1 unless an
-    /// initial pose gives another), in the search and every stage.
-    Fixed,
-}
+mod robust;
+mod settings;
+mod shard;
 
-/// Everything the fit can be told. [`FitSettings::default`] is the one default of
-/// the command line, the browser, the npm package and `bench`.
-#[derive(Debug, Clone)]
-pub struct FitSettings {
-    /// The coarse orientation search.
-    pub search: SearchSettings,
-    /// The coarse-to-fine refinement stages, in order.
-    pub stages: Vec<StageSettings>,
-    /// The optimiser of every stage (default Levenberg–Marquardt).
-    pub optimiser: Optimiser,
-    /// Adam's step sizes (multiplied by each stage's factor).
-    pub adam: AdamSettings,
-    /// Loss weight λ1 of the soft IoU term (default 1).
-    pub lambda_iou: f64,
-    /// Loss weight λ2 of the contour (chamfer) term (default 1).
-    pub lambda_contour: f64,
-    /// How the scale is fitted (default anisotropic).
-    pub scale_mode: ScaleMode,
-    /// Each view's window (default: a square around the mask, 30 % margin on each side).
-    pub window: WindowMode,
-    /// A stage ends for a candidate when its best loss improved by less than this
-    /// (relative) over 5 iterations (default 1e-3); in the last stage that is convergence.
-    pub tolerance: f64,
-    /// Where the verdict's lines are drawn.
-    pub verdict: VerdictThresholds,
-    /// Down-weight, from the second stage on, a view whose loss contradicts the
-    /// others' ([`robust_weights`]; default on).
-    pub robust: bool,
-}
+pub use robust::robust_weights;
+pub use settings::{FitSettings, Phase, Progress, ScaleMode, Termination, OBJECT_MARGIN};
+pub use shard::{Request, Response, Shard};
 
-impl Default for FitSettings {
-    fn default() -> Self {
-        FitSettings {
-            search: SearchSettings::default(),
-            stages: StageSettings::default_schedule(),
-            optimiser: Optimiser::LevenbergMarquardt,
-            adam: AdamSettings::default(),
-            lambda_iou: 1.0,
-            lambda_contour: 1.0,
-            scale_mode: ScaleMode::Anisotropic,
-            window: WindowMode::Object { margin: OBJECT_MARGIN },
-            tolerance: 1e-3,
-            verdict: VerdictThresholds::default(),
-            robust: true,
-        }
-    }
-}
-
-impl FitSettings {
-    /// The default object window (a square around the mask, 30 % margin on each side).
-    pub fn window_object_default(&self) -> WindowMode {
-        WindowMode::Object { margin: OBJECT_MARGIN }
-    }
-
-    /// Checks ranges.
-    pub fn validate(&self) -> Result<()> {
-        let bad = |m: String| Err(Error::Settings(m));
-        if self.stages.is_empty() {
-            return bad("at least one refinement stage is needed".into());
-        }
-        for (i, s) in self.stages.iter().enumerate() {
-            if !(s.sigma > 0.0 && s.sigma.is_finite()) || s.resolution < 8 || s.keep == 0 || s.iterations == 0 {
-                return bad(format!(
-                    "stage {i}: sigma must be > 0, resolution ≥ 8, keep ≥ 1 and iterations ≥ 1"
-                ));
-            }
-        }
-        if self.search.keep == 0 || self.search.resolution < 8 {
-            return bad("search: keep ≥ 1 and resolution ≥ 8".into());
-        }
-        if let WindowMode::Object { margin } = self.window {
-            if !(margin.is_finite() && margin >= 0.0) {
-                return bad(format!("window margin must be ≥ 0, got {margin}"));
-            }
-        }
-        self.objective(&self.stages[0]).validate()
-    }
-
-    /// The objective's settings at `stage`.
-    pub fn objective(&self, stage: &StageSettings) -> ObjectiveSettings {
-        ObjectiveSettings {
-            soft: SoftSettings {
-                sigma: stage.sigma,
-                eps: 1e-4,
-            },
-            lambda_iou: self.lambda_iou,
-            lambda_contour: self.lambda_contour,
-        }
-    }
-}
-
-/// What the estimator is doing.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Phase {
-    /// Scoring candidate orientations.
-    Search,
-    /// Gradient refinement of the best candidates.
-    Refine,
-    /// Finished.
-    Done,
-}
-
-/// Why the fit stopped. A fit whose verdict is `failed` is never `converged`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Termination {
-    /// The loss stopped improving by more than the tolerance, at a pose the views accept.
-    Converged,
-    /// The last stage ran all its iterations.
-    MaxIterations,
-    /// The loss stopped improving at a pose the views reject, or rose or stayed flat
-    /// for long: the best pose so far was kept.
-    Stalled,
-}
-
-/// A snapshot after a step, for display.
-#[derive(Debug, Clone, Serialize)]
-pub struct Progress {
-    /// Current phase.
-    pub phase: Phase,
-    /// Optimiser iterations done so far (all candidates, all stages).
-    pub iteration: usize,
-    /// Search candidates scored so far.
-    pub searched: usize,
-    /// Number of search candidates in all.
-    pub search_total: usize,
-    /// Refinement stage (0-based).
-    pub stage: usize,
-    /// Candidate index being refined.
-    pub candidate: usize,
-    /// The loss at the current pose (NaN during the search).
-    pub loss: f64,
-    /// Hard IoU per view at the current pose, at the current stage's resolution
-    /// (filled by [`Estimator::progress`], empty after [`Estimator::step`]).
-    pub view_iou: Vec<f64>,
-    /// The current pose.
-    #[serde(skip)]
-    pub pose: Pose,
-    /// Why the fit stopped, once done.
-    pub termination: Option<Termination>,
-    /// The verdict, once done.
-    pub verdict: Option<Verdict>,
-}
+use robust::{free_parameters, leave_one_out};
+use shard::score_rotations;
 
 /// One candidate being refined.
 #[derive(Debug, Clone)]
@@ -253,9 +105,6 @@ struct Final {
     judgement: Judgement,
 }
 
-/// The default object window's margin on each side, as a fraction of the mask's box.
-pub const OBJECT_MARGIN: f64 = 0.3;
-
 /// Search candidates scored per step.
 const SEARCH_BATCH: usize = 16;
 /// A candidate whose best loss has not improved for this many iterations is done.
@@ -263,7 +112,8 @@ const PATIENCE: usize = 25;
 
 /// The step-wise pose estimator.
 pub struct Estimator {
-    mesh: Mesh,
+    /// The mesh (with its edge topology).
+    model: RenderMesh,
     views: Vec<View>,
     windows: Vec<Window>,
     settings: FitSettings,
@@ -271,14 +121,13 @@ pub struct Estimator {
     radius: f64,
     phase: Phase,
     /// The mesh the search and the stages at or below its resolution render.
-    search_mesh: Mesh,
+    search_model: RenderMesh,
     // Search state.
     rotations: Vec<DMat3>,
     next_rotation: usize,
     start: Pose,
     search: Option<Objective>,
     scored: Vec<Candidate>,
-    bits: BitMask,
     // Refinement state.
     tracks: Vec<Track>,
     stage: usize,
@@ -308,12 +157,12 @@ impl Estimator {
         })?;
         let windows = views.iter().map(|v| Window::for_view(v, settings.window)).collect();
         // Cells of about two pixels at the search resolution: silhouettes within a pixel.
-        let search_mesh = mesh.clustered(settings.search.resolution * 3 / 8);
+        let search_model = RenderMesh::new(mesh.clustered(settings.search.resolution * 3 / 8));
         let mut est = Estimator {
             centre: b.centre(),
             radius: (b.size().length() * 0.5).max(1e-12),
-            search_mesh,
-            mesh,
+            search_model,
+            model: RenderMesh::new(mesh),
             views,
             windows,
             phase: Phase::Search,
@@ -322,7 +171,6 @@ impl Estimator {
             start: Pose::IDENTITY,
             search: None,
             scored: Vec::new(),
-            bits: BitMask::empty(0, 0),
             tracks: Vec::new(),
             stage: 0,
             current: 0,
@@ -360,7 +208,7 @@ impl Estimator {
 
     /// The mesh being fitted.
     pub fn mesh(&self) -> &Mesh {
-        &self.mesh
+        &self.model.mesh
     }
 
     /// The views being fitted.
@@ -390,7 +238,7 @@ impl Estimator {
 
     /// The starting scale: 1 (the CAD model is to scale) or from the masks' areas.
     fn initial_guess(&self) -> Result<Pose> {
-        let mean_area = (init::surface_area(&self.mesh) / 4.0).max(1e-300);
+        let mean_area = (init::surface_area(&self.model.mesh) / 4.0).max(1e-300);
         // One view: the depth at which a unit-scale object covers the mask's area.
         let depth = |v: &View| {
             let c = v.camera();
@@ -457,6 +305,88 @@ impl Estimator {
         Ok(self.snapshot(Vec::new()))
     }
 
+    /// The work the next step needs, to be computed by [`Shard`]s (other threads, Web
+    /// Workers) and handed back with [`Estimator::respond`]; `None` when the fit is done.
+    /// [`Estimator::step`] does the same work here.
+    pub fn request(&self) -> Option<Request> {
+        match self.phase {
+            Phase::Search => Some(Request::Search {
+                start: self.start,
+                first: self.next_rotation,
+                count: SEARCH_BATCH.min(self.rotations.len() - self.next_rotation),
+            }),
+            Phase::Refine => Some(Request::Evaluate {
+                stage: self.stage,
+                pose: self.tracks[self.current].pose,
+                kind: self.refine_kind(),
+                model_union: self
+                    .objective
+                    .as_ref()
+                    .map(|o| o.model_union().to_vec())
+                    .unwrap_or_default(),
+            }),
+            Phase::Done => None,
+        }
+    }
+
+    /// Completes the step [`Estimator::request`] asked for, with the shards' responses
+    /// to it (for an evaluation, together every view's part, once; for a search batch,
+    /// every rotation of it).
+    ///
+    /// Errors: responses that do not answer the current request.
+    pub fn respond(&mut self, responses: Vec<Response>) -> Result<Progress> {
+        let bad = |m: String| Err(Error::Settings(format!("respond: {m}")));
+        match (self.request(), self.phase) {
+            (Some(Request::Search { first, count, .. }), Phase::Search) => {
+                let mut batches: Vec<(usize, Vec<Candidate>)> = Vec::new();
+                for r in responses {
+                    match r {
+                        Response::Candidates { first, candidates } => batches.push((first, candidates)),
+                        Response::Parts { .. } => return bad("view parts for a search batch".into()),
+                    }
+                }
+                batches.sort_by_key(|b| b.0);
+                let mut next = first;
+                let mut all = Vec::with_capacity(count);
+                for (f, c) in batches {
+                    if f != next {
+                        return bad(format!("search rotations from {f}, expected {next}"));
+                    }
+                    next += c.len();
+                    all.extend(c);
+                }
+                if all.len() != count {
+                    return bad(format!("{} candidates for a batch of {count}", all.len()));
+                }
+                self.finish_search_batch(all)?;
+            }
+            (Some(Request::Evaluate { .. }), Phase::Refine) => {
+                let n = self.views.len();
+                let mut parts: Vec<Option<ViewPart>> = vec![None; n];
+                for r in responses {
+                    match r {
+                        Response::Parts { views, parts: p } if views.len() == p.len() => {
+                            for (v, part) in views.into_iter().zip(p) {
+                                match parts.get_mut(v) {
+                                    Some(slot @ None) => *slot = Some(part),
+                                    _ => return bad(format!("view {v} twice or beyond the {n} views")),
+                                }
+                            }
+                        }
+                        _ => return bad("not one part per view named".into()),
+                    }
+                }
+                let parts: Option<Vec<ViewPart>> = parts.into_iter().collect();
+                let Some(parts) = parts else {
+                    return bad("some views have no part".into());
+                };
+                self.refine_apply(&parts)?;
+            }
+            _ => return bad("the fit is done".into()),
+        }
+        Ok(self.snapshot(Vec::new()))
+    }
+
     /// Steps until done (at most `max_steps`); returns the last progress.
     pub fn run(&mut self, max_steps: usize) -> Result<Progress> {
         for _ in 0..max_steps {
@@ -469,30 +399,27 @@ impl Estimator {
     }
 
     fn search_step(&mut self) -> Result<()> {
-        let end = (self.next_rotation + SEARCH_BATCH).min(self.rotations.len());
+        let (first, count) = (
+            self.next_rotation,
+            SEARCH_BATCH.min(self.rotations.len() - self.next_rotation),
+        );
         let targets = self.search.as_ref().map(|o| o.targets()).unwrap_or_default();
-        let refit_scale = self.settings.scale_mode != ScaleMode::Fixed;
-        for i in self.next_rotation..end {
-            let r = self.rotations[i];
-            let s = self.start.scale;
-            let c = self.start.apply(self.centre);
-            let pose = Pose {
-                rotation: r,
-                translation: c - r * (s * self.centre),
-                scale: s,
-            };
-            let cand = search::score_candidate(
-                &self.search_mesh,
-                targets,
-                pose,
-                self.centre,
-                self.settings.search.refit_rounds,
-                refit_scale,
-                &mut self.bits,
-            );
-            self.scored.push(cand);
-        }
-        self.next_rotation = end;
+        let scored = score_rotations(
+            &self.search_model.mesh,
+            targets,
+            &self.rotations[first..first + count],
+            &self.start,
+            self.centre,
+            &self.settings,
+        );
+        self.finish_search_batch(scored)
+    }
+
+    /// Takes a batch of scored candidates (the next rotations in order); after the
+    /// last batch, keeps the best and starts the refinement.
+    fn finish_search_batch(&mut self, scored: Vec<Candidate>) -> Result<()> {
+        self.next_rotation += scored.len();
+        self.scored.extend(scored);
         if self.next_rotation >= self.rotations.len() {
             let best = search::select_best(
                 std::mem::take(&mut self.scored),
@@ -511,24 +438,47 @@ impl Estimator {
         Ok(())
     }
 
+    /// The evaluation the next refinement iteration needs.
+    fn refine_kind(&self) -> PartKind {
+        match self.settings.optimiser {
+            Optimiser::Adam => PartKind::Gradient,
+            Optimiser::LevenbergMarquardt => PartKind::GaussNewton,
+        }
+    }
+
     fn refine_step(&mut self) -> Result<()> {
+        let kind = self.refine_kind();
+        let pose = self.tracks[self.current].pose;
+        let weights = self.tracks[self.current].weights.clone();
+        let model = if self.settings.stages[self.stage].resolution <= self.settings.search.resolution {
+            &self.search_model
+        } else {
+            &self.model
+        };
+        let objective = self
+            .objective
+            .as_mut()
+            .ok_or_else(|| Error::Settings("internal: no objective in the refine phase".into()))?;
+        objective.set_weights(&weights)?;
+        let union = objective.model_union().to_vec();
+        let parts = objective.view_parts(model, &pose, kind, &union)?;
+        self.refine_apply(&parts)
+    }
+
+    /// Completes a refinement iteration from every view's part at the current pose.
+    fn refine_apply(&mut self, parts: &[ViewPart]) -> Result<()> {
         let stage = self.settings.stages[self.stage].clone();
         let last_stage = self.stage + 1 == self.settings.stages.len();
         let objective = self
             .objective
             .as_mut()
             .ok_or_else(|| Error::Settings("internal: no objective in the refine phase".into()))?;
-        let mesh = if stage.resolution <= self.settings.search.resolution {
-            &self.search_mesh
-        } else {
-            &self.mesh
-        };
         let t = &mut self.tracks[self.current];
         objective.set_weights(&t.weights)?;
+        let (ev, ne) = objective.combine_parts(parts)?;
         let length = self.radius * t.pose.scale.max_element();
         let loss = match self.settings.optimiser {
             Optimiser::Adam => {
-                let ev = objective.value_and_gradient(mesh, &t.pose)?;
                 let frac = self.iter_in_stage as f64 / stage.iterations.max(1) as f64;
                 let lr = stage.lr_start * (stage.lr_end / stage.lr_start).powf(frac);
                 let mut g = params::scale_gradient(&ev.gradient, length);
@@ -543,7 +493,6 @@ impl Estimator {
                 ev.total
             }
             Optimiser::LevenbergMarquardt => {
-                let (ev, ne) = objective.normal_equations(mesh, &t.pose)?;
                 t.record(ev.total);
                 let free = free_parameters(self.settings.scale_mode);
                 let scaled = lm::scale_equations(&ne, length);
@@ -594,7 +543,7 @@ impl Estimator {
                 // Ranked by the mean over all views (not the candidate's own weights:
                 // candidates must be compared on the same footing).
                 t.pose = t.best_pose;
-                let ious = objective.hard_ious(&self.mesh, &t.pose);
+                let ious = objective.hard_ious(&self.model.mesh, &t.pose);
                 (ious.iter().sum::<f64>() / ious.len().max(1) as f64, t)
             })
             .collect();
@@ -605,7 +554,7 @@ impl Estimator {
         if self.stage == 0 && self.settings.robust {
             let free = free_parameters(self.settings.scale_mode);
             for t in &mut self.tracks {
-                if let Some((v, pose)) = leave_one_out(objective, &self.search_mesh, t, free, self.radius)? {
+                if let Some((v, pose)) = leave_one_out(objective, &self.search_model, t, free, self.radius)? {
                     t.excluded[v] = true;
                     t.weights[v] = 0.0;
                     t.pose = pose;
@@ -625,7 +574,7 @@ impl Estimator {
             let mut objective = self.make_objective(self.stage)?;
             if self.settings.robust {
                 for t in &mut self.tracks {
-                    let ev = objective.value(&self.mesh, &t.pose)?;
+                    let ev = objective.value(&self.model, &t.pose)?;
                     let w = robust_weights(&ev.views.iter().map(|v| v.iou).collect::<Vec<_>>());
                     t.weights = w
                         .iter()
@@ -645,7 +594,11 @@ impl Estimator {
     fn finish(&mut self) {
         let t = &self.tracks[0];
         let pose = t.best_pose;
-        let views: Vec<ViewFigures> = self.views.iter().map(|v| full_figures(&self.mesh, &pose, v)).collect();
+        let views: Vec<ViewFigures> = self
+            .views
+            .iter()
+            .map(|v| full_figures(&self.model.mesh, &pose, v))
+            .collect();
         let names: Vec<&str> = self.views.iter().map(|v| v.name()).collect();
         let ious: Vec<f64> = views.iter().map(|f| f.iou).collect();
         let inconsistent: Vec<String> = self
@@ -689,8 +642,8 @@ impl Estimator {
             f.views.iter().map(|v| v.iou).collect()
         } else {
             let (objective, mesh) = match (&self.search, &self.objective) {
-                (Some(s), _) => (s, &self.search_mesh),
-                (None, Some(o)) => (o, &self.mesh),
+                (Some(s), _) => (s, &self.search_model.mesh),
+                (None, Some(o)) => (o, &self.model.mesh),
                 (None, None) => return self.snapshot(Vec::new()),
             };
             let mut bits = BitMask::empty(0, 0);
@@ -741,131 +694,13 @@ impl Estimator {
     pub fn view_figures(&self, pose: &Pose) -> Vec<ViewFigures> {
         match &self.done {
             Some(f) if f.pose == *pose => f.views.clone(),
-            _ => self.views.iter().map(|v| full_figures(&self.mesh, pose, v)).collect(),
+            _ => self
+                .views
+                .iter()
+                .map(|v| full_figures(&self.model.mesh, pose, v))
+                .collect(),
         }
     }
-}
-
-/// The LM parameters a scale mode frees.
-fn free_parameters(mode: ScaleMode) -> Free {
-    match mode {
-        ScaleMode::Fixed => Free::NoScale,
-        ScaleMode::Isotropic => Free::IsotropicScale,
-        ScaleMode::Anisotropic => Free::All,
-    }
-}
-
-/// Levenberg–Marquardt iterations of `objective` from `start`; the best pose and loss.
-fn polish(
-    objective: &mut Objective,
-    mesh: &Mesh,
-    start: Pose,
-    iterations: usize,
-    free: Free,
-    radius: f64,
-) -> Result<(Pose, f64)> {
-    let mut lm = Lm::new();
-    let (mut pose, mut best) = (start, (start, f64::INFINITY));
-    for _ in 0..iterations {
-        let (ev, ne) = objective.normal_equations(mesh, &pose)?;
-        if ev.total < best.1 {
-            best = (pose, ev.total);
-        }
-        let length = radius * pose.scale.max_element();
-        pose = lm.next_pose(pose, lm::scale_equations(&ne, length), free, |p, d| {
-            params::apply(p, d, length)
-        });
-    }
-    Ok(best)
-}
-
-/// Iterations of each leave-one-out fit.
-const LOO_ITERATIONS: usize = 15;
-
-/// The leave-one-out consensus test (SPEC §4, occlusion without an ignore mask): when
-/// one view's loss stands out at the candidate's pose, each view in turn is left out
-/// for a short fit; a view is inconsistent when, without it, the others agree better
-/// (their mean IoU loss falls) while it disagrees with them (its loss above twice the
-/// worst of theirs, plus 0.05). Returns the view
-/// whose omission helps the others most, with the pose fitted without it.
-fn leave_one_out(
-    objective: &mut Objective,
-    mesh: &Mesh,
-    track: &Track,
-    free: Free,
-    radius: f64,
-) -> Result<Option<(usize, Pose)>> {
-    let n = track.weights.len();
-    if n < 3 || track.excluded.iter().any(|&x| x) {
-        return Ok(None);
-    }
-    objective.set_weights(&track.weights)?;
-    let losses: Vec<f64> = objective
-        .value(mesh, &track.pose)?
-        .views
-        .iter()
-        .map(|v| v.iou)
-        .collect();
-    let mut sorted = losses.clone();
-    sorted.sort_by(f64::total_cmp);
-    let (median, worst) = (sorted[n / 2], sorted[n - 1]);
-    if worst <= 1.3 * median || worst < median + 0.05 {
-        return Ok(None);
-    }
-    let mut found: Option<(f64, usize, Pose)> = None;
-    for v in 0..n {
-        let mut w = track.weights.clone();
-        w[v] = 0.0;
-        if w.iter().sum::<f64>() <= 0.0 {
-            continue;
-        }
-        objective.set_weights(&w)?;
-        let (pose, _) = polish(objective, mesh, track.pose, LOO_ITERATIONS, free, radius)?;
-        let l: Vec<f64> = objective.value(mesh, &pose)?.views.iter().map(|v| v.iou).collect();
-        let others = |x: &[f64]| {
-            x.iter()
-                .enumerate()
-                .filter(|(u, _)| *u != v)
-                .map(|(_, l)| *l)
-                .collect::<Vec<_>>()
-        };
-        let (before, after) = (others(&losses), others(&l));
-        let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
-        let worst_other = after.iter().fold(0.0f64, |m, x| m.max(*x));
-        if mean(&after) < mean(&before)
-            && l[v] > 2.0 * worst_other + 0.05
-            && found.as_ref().is_none_or(|f| mean(&after) < f.0)
-        {
-            found = Some((mean(&after), v, pose));
-        }
-    }
-    objective.set_weights(&track.weights)?;
-    Ok(found.map(|(_, v, p)| (v, p)))
-}
-
-/// The views' weights from their soft IoU losses `r_v` at a candidate's pose (SPEC
-/// §4, occlusion without an ignore mask): a view whose loss is far above the others'
-/// contradicts them — an occluder, the gripper, a bad mask — and is down-weighted.
-/// With the robust scale `τ = max(2·median(r), 0.05)`, `w_v = 1` for `r_v ≤ τ` and
-/// `(τ/r_v)²` above (a Cauchy-like tail); with fewer than 3 views there is no majority
-/// to trust and every weight is 1.
-pub fn robust_weights(losses: &[f64]) -> Vec<f64> {
-    if losses.len() < 3 || losses.iter().any(|r| !r.is_finite()) {
-        return vec![1.0; losses.len()];
-    }
-    let mut sorted = losses.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    let n = sorted.len();
-    let median = if n % 2 == 1 {
-        sorted[n / 2]
-    } else {
-        0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
-    };
-    let tau = (2.0 * median).max(0.05);
-    losses
-        .iter()
-        .map(|&r| if r <= tau { 1.0 } else { (tau / r).powi(2) })
-        .collect()
 }
 
 /// A view's figures at full resolution (IoU over the known pixels).

@@ -1,0 +1,180 @@
+//! What a fit can be told ([`FitSettings`], whose [`Default`] is the one default of
+//! every front end) and what it reports as it goes ([`Phase`], [`Progress`],
+//! [`Termination`]).
+
+use crate::error::{Error, Result};
+use crate::loss::objective::ObjectiveSettings;
+use crate::loss::target::WindowMode;
+use crate::optim::adam::AdamSettings;
+use crate::optim::schedule::{Optimiser, StageSettings};
+use crate::optim::search::SearchSettings;
+use crate::pose::Pose;
+use crate::raster::silhouette::RasterKind;
+use crate::raster::soft::SoftSettings;
+use crate::verdict::{Verdict, VerdictThresholds};
+use serde::{Deserialize, Serialize};
+
+/// The default object window's margin on each side, as a fraction of the mask's box.
+pub const OBJECT_MARGIN: f64 = 0.3;
+
+/// How the scale is fitted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ScaleMode {
+    /// Per-axis scale (9-DoF; the default).
+    Anisotropic,
+    /// One scale for all axes (7-DoF).
+    Isotropic,
+    /// The CAD model is to scale: the scale stays at the initial value (1 unless an
+    /// initial pose gives another), in the search and every stage.
+    Fixed,
+}
+
+/// Everything the fit can be told. [`FitSettings::default`] is the one default of
+/// the command line, the browser, the npm package and `bench`.
+#[derive(Debug, Clone)]
+pub struct FitSettings {
+    /// The coarse orientation search.
+    pub search: SearchSettings,
+    /// The coarse-to-fine refinement stages, in order.
+    pub stages: Vec<StageSettings>,
+    /// The optimiser of every stage (default Levenberg–Marquardt).
+    pub optimiser: Optimiser,
+    /// Adam's step sizes (multiplied by each stage's factor).
+    pub adam: AdamSettings,
+    /// Loss weight λ1 of the soft IoU term (default 1).
+    pub lambda_iou: f64,
+    /// Loss weight λ2 of the contour (chamfer) term (default 1).
+    pub lambda_contour: f64,
+    /// How the scale is fitted (default anisotropic).
+    pub scale_mode: ScaleMode,
+    /// Each view's window (default: a square around the mask, 30 % margin on each side).
+    pub window: WindowMode,
+    /// A stage ends for a candidate when its best loss improved by less than this
+    /// (relative) over 5 iterations (default 1e-3); in the last stage that is convergence.
+    pub tolerance: f64,
+    /// Where the verdict's lines are drawn.
+    pub verdict: VerdictThresholds,
+    /// The soft rasteriser of every stage (default: the silhouette-edge one).
+    pub raster: RasterKind,
+    /// Down-weight, from the second stage on, a view whose loss contradicts the
+    /// others' ([`robust_weights`]; default on).
+    pub robust: bool,
+}
+
+impl Default for FitSettings {
+    fn default() -> Self {
+        FitSettings {
+            search: SearchSettings::default(),
+            stages: StageSettings::default_schedule(),
+            optimiser: Optimiser::LevenbergMarquardt,
+            adam: AdamSettings::default(),
+            lambda_iou: 1.0,
+            lambda_contour: 1.0,
+            scale_mode: ScaleMode::Anisotropic,
+            window: WindowMode::Object { margin: OBJECT_MARGIN },
+            tolerance: 1e-3,
+            verdict: VerdictThresholds::default(),
+            robust: true,
+            raster: RasterKind::Edge,
+        }
+    }
+}
+
+impl FitSettings {
+    /// The default object window (a square around the mask, 30 % margin on each side).
+    pub fn window_object_default(&self) -> WindowMode {
+        WindowMode::Object { margin: OBJECT_MARGIN }
+    }
+
+    /// Checks ranges.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::Settings(m));
+        if self.stages.is_empty() {
+            return bad("at least one refinement stage is needed".into());
+        }
+        for (i, s) in self.stages.iter().enumerate() {
+            if !(s.sigma > 0.0 && s.sigma.is_finite()) || s.resolution < 8 || s.keep == 0 || s.iterations == 0 {
+                return bad(format!(
+                    "stage {i}: sigma must be > 0, resolution ≥ 8, keep ≥ 1 and iterations ≥ 1"
+                ));
+            }
+        }
+        if self.search.keep == 0 || self.search.resolution < 8 {
+            return bad("search: keep ≥ 1 and resolution ≥ 8".into());
+        }
+        if let WindowMode::Object { margin } = self.window {
+            if !(margin.is_finite() && margin >= 0.0) {
+                return bad(format!("window margin must be ≥ 0, got {margin}"));
+            }
+        }
+        self.objective(&self.stages[0]).validate()
+    }
+
+    /// The objective's settings at `stage`.
+    pub fn objective(&self, stage: &StageSettings) -> ObjectiveSettings {
+        ObjectiveSettings {
+            soft: SoftSettings {
+                sigma: stage.sigma,
+                eps: 1e-4,
+            },
+            lambda_iou: self.lambda_iou,
+            lambda_contour: self.lambda_contour,
+            raster: self.raster,
+        }
+    }
+}
+
+/// What the estimator is doing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    /// Scoring candidate orientations.
+    Search,
+    /// Gradient refinement of the best candidates.
+    Refine,
+    /// Finished.
+    Done,
+}
+
+/// Why the fit stopped. A fit whose verdict is `failed` is never `converged`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Termination {
+    /// The loss stopped improving by more than the tolerance, at a pose the views accept.
+    Converged,
+    /// The last stage ran all its iterations.
+    MaxIterations,
+    /// The loss stopped improving at a pose the views reject, or rose or stayed flat
+    /// for long: the best pose so far was kept.
+    Stalled,
+}
+
+/// A snapshot after a step, for display.
+#[derive(Debug, Clone, Serialize)]
+pub struct Progress {
+    /// Current phase.
+    pub phase: Phase,
+    /// Optimiser iterations done so far (all candidates, all stages).
+    pub iteration: usize,
+    /// Search candidates scored so far.
+    pub searched: usize,
+    /// Number of search candidates in all.
+    pub search_total: usize,
+    /// Refinement stage (0-based).
+    pub stage: usize,
+    /// Candidate index being refined.
+    pub candidate: usize,
+    /// The loss at the current pose (NaN during the search).
+    pub loss: f64,
+    /// Hard IoU per view at the current pose, at the current stage's resolution
+    /// (filled by [`Estimator::progress`], empty after [`Estimator::step`]).
+    pub view_iou: Vec<f64>,
+    /// The current pose.
+    #[serde(skip)]
+    pub pose: Pose,
+    /// Why the fit stopped, once done.
+    pub termination: Option<Termination>,
+    /// The verdict, once done.
+    pub verdict: Option<Verdict>,
+}

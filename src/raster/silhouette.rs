@@ -1,0 +1,222 @@
+//! The soft silhouette a loss sees, from either rasteriser behind one interface:
+//! [`RasterKind::Edge`] (the default: the hard coverage inside, softness and gradient
+//! from the outline edges only, `raster::edge`) or [`RasterKind::SoftRas`] (the
+//! paper's renderer, every triangle's σ-band, `raster::soft`; the one PyTorch3D
+//! checks). A [`RenderMesh`] is a mesh with the edge topology it needs, built once.
+//!
+//! Three entry points, as the objective needs them: the silhouette alone; the
+//! silhouette and, in the same sweep, the 9-gradients of `Σ_p W_f(p)·A_p` for K
+//! per-pixel weight fields; and the silhouette with `∂A_p/∂θ` per pixel (forward mode,
+//! for Gauss–Newton). θ order `[ω0, ω1, ω2, t0, t1, t2, ls0, ls1, ls2]` (see
+//! `raster::project`).
+
+use crate::camera::Camera;
+use crate::error::Result;
+use crate::mesh::Mesh;
+use crate::pose::Pose;
+use crate::raster::edge::{EdgeSilhouette, EdgeTopology};
+use crate::raster::project::{PoseProjection, POSE_DIM};
+use crate::raster::soft::{SoftRasterizer, SoftSettings};
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+use wide::f64x2;
+
+/// Which soft rasteriser renders the silhouettes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RasterKind {
+    /// Silhouette-edge: interior from the exact hard coverage, softness and gradient
+    /// from the outline edges (cost follows the outline, not the triangle count).
+    #[default]
+    Edge,
+    /// SoftRas (Liu et al. 2019; the paper's renderer): every triangle's σ-band.
+    SoftRas,
+}
+
+/// A mesh with the edge topology the silhouette-edge rasteriser needs (welded
+/// adjacency, built once per mesh).
+#[derive(Debug, Clone)]
+pub struct RenderMesh {
+    /// The mesh, model frame.
+    pub mesh: Mesh,
+    topology: EdgeTopology,
+}
+
+impl RenderMesh {
+    /// Builds the topology of `mesh`.
+    pub fn new(mesh: Mesh) -> RenderMesh {
+        let topology = EdgeTopology::from_mesh(&mesh);
+        RenderMesh { mesh, topology }
+    }
+
+    /// The edge topology.
+    pub fn topology(&self) -> &EdgeTopology {
+        &self.topology
+    }
+}
+
+/// One view's reusable soft-silhouette renderer (keep one per view).
+#[derive(Debug, Clone)]
+pub struct SilhouetteRenderer {
+    kind: RasterKind,
+    soft: SoftRasterizer,
+    edge: EdgeSilhouette,
+    /// The edge path's projection (SoftRas keeps its own).
+    projection: PoseProjection,
+    /// Per vertex, its slot among the vertices the last records touch (`u32::MAX`: none);
+    /// reset after use, so only touched vertices cost anything.
+    slot: Vec<u32>,
+    /// The touched vertices, in slot order.
+    touched: Vec<u32>,
+    /// Per touched vertex: `∂(u, v)/∂θ`, or the fields' ∂/∂(u, v).
+    vertex_jac: Vec<[[f64x2; 5]; 2]>,
+    grad_buf: Vec<DVec2>,
+}
+
+impl SilhouetteRenderer {
+    /// A renderer of `kind` with empty buffers.
+    pub fn new(kind: RasterKind) -> SilhouetteRenderer {
+        SilhouetteRenderer {
+            kind,
+            soft: SoftRasterizer::new(),
+            edge: EdgeSilhouette::new(),
+            projection: PoseProjection::default(),
+            slot: Vec::new(),
+            touched: Vec::new(),
+            vertex_jac: Vec::new(),
+            grad_buf: Vec::new(),
+        }
+    }
+
+    /// The rasteriser in use.
+    pub fn kind(&self) -> RasterKind {
+        self.kind
+    }
+
+    /// The last render's silhouette A (row-major, the camera's width × height).
+    pub fn alpha(&self) -> &[f64] {
+        match self.kind {
+            RasterKind::SoftRas => &self.soft.silhouette().alpha,
+            RasterKind::Edge => self.edge.alpha(),
+        }
+    }
+
+    fn render_edge(&mut self, m: &RenderMesh, pose: &Pose, camera: &Camera, s: &SoftSettings, jac: bool) -> Result<()> {
+        self.projection.project(&m.mesh, pose, camera, jac);
+        self.edge
+            .render(&m.topology, &self.projection.proj, &m.mesh.triangles, camera, s)
+    }
+
+    /// Renders the silhouette of `m` at `pose` in `camera`.
+    pub fn render(&mut self, m: &RenderMesh, pose: &Pose, camera: &Camera, s: &SoftSettings) -> Result<&[f64]> {
+        match self.kind {
+            RasterKind::SoftRas => {
+                self.soft.render(&m.mesh, pose, camera, s)?;
+            }
+            RasterKind::Edge => self.render_edge(m, pose, camera, s, false)?,
+        }
+        Ok(self.alpha())
+    }
+
+    /// Renders and returns, for K per-pixel weight fields (`field(p)` gives pixel p's
+    /// K weights), the 9-gradient of `Σ_p W_f(p)·A_p` for each field.
+    pub fn render_with_gradients<const K: usize>(
+        &mut self,
+        m: &RenderMesh,
+        pose: &Pose,
+        camera: &Camera,
+        s: &SoftSettings,
+        field: impl Fn(usize) -> [f64; K],
+    ) -> Result<[[f64; POSE_DIM]; K]> {
+        if self.kind == RasterKind::SoftRas {
+            return self.soft.render_with_gradients(&m.mesh, pose, camera, s, field);
+        }
+        self.render_edge(m, pose, camera, s, true)?;
+        self.index_touched(m.mesh.positions.len());
+        // Each field's ∂/∂uv per touched vertex, in one pass over the records.
+        self.grad_buf.clear();
+        self.grad_buf.resize(self.touched.len() * K, DVec2::ZERO);
+        for r in self.edge.records() {
+            let w = field(r.px as usize);
+            let (sa, sb) = (
+                self.slot[r.a as usize] as usize * K,
+                self.slot[r.b as usize] as usize * K,
+            );
+            for (f, wf) in w.iter().enumerate() {
+                self.grad_buf[sa + f] += r.ga * *wf;
+                self.grad_buf[sb + f] += r.gb * *wf;
+            }
+        }
+        let mut out = [[0.0; POSE_DIM]; K];
+        for (f, o) in out.iter_mut().enumerate() {
+            let (g, t) = (&self.grad_buf, &self.touched);
+            *o = self
+                .projection
+                .pose_gradient_sparse(t.iter().enumerate().map(|(k, &v)| (v as usize, g[k * K + f])));
+        }
+        self.reset_touched();
+        Ok(out)
+    }
+
+    /// Gives every vertex the last records touch a slot (`self.touched` in slot order).
+    fn index_touched(&mut self, n: usize) {
+        if self.slot.len() != n {
+            self.slot.clear();
+            self.slot.resize(n, u32::MAX);
+        }
+        self.touched.clear();
+        for r in self.edge.records() {
+            for v in [r.a, r.b] {
+                if self.slot[v as usize] == u32::MAX {
+                    self.slot[v as usize] = self.touched.len() as u32;
+                    self.touched.push(v);
+                }
+            }
+        }
+    }
+
+    /// Clears the slots of the touched vertices.
+    fn reset_touched(&mut self) {
+        for &v in &self.touched {
+            self.slot[v as usize] = u32::MAX;
+        }
+    }
+
+    /// Renders and calls `visit(p, A_p, J_p)` for every pixel p whose value has a
+    /// non-zero derivative, `J_p = ∂A_p/∂θ`.
+    pub fn render_with_jacobians(
+        &mut self,
+        m: &RenderMesh,
+        pose: &Pose,
+        camera: &Camera,
+        s: &SoftSettings,
+        mut visit: impl FnMut(usize, f64, &[f64; POSE_DIM]),
+    ) -> Result<()> {
+        if self.kind == RasterKind::SoftRas {
+            self.soft.render_with_jacobians(&m.mesh, pose, camera, s, visit)?;
+            return Ok(());
+        }
+        self.render_edge(m, pose, camera, s, true)?;
+        self.index_touched(m.mesh.positions.len());
+        self.vertex_jac.clear();
+        let p = &self.projection;
+        self.vertex_jac
+            .extend(self.touched.iter().map(|&v| p.vertex_pose_jacobian(v as usize)));
+        let (vj, alpha, slot) = (&self.vertex_jac, self.edge.alpha(), &self.slot);
+        for r in self.edge.records() {
+            let (ma, mb) = (&vj[slot[r.a as usize] as usize], &vj[slot[r.b as usize] as usize]);
+            let [ax, ay, bx, by] = [r.ga.x, r.ga.y, r.gb.x, r.gb.y].map(|v| f64x2::new([v; 2]));
+            let mut j = [0.0; POSE_DIM];
+            for c in 0..5 {
+                let v = (ma[0][c] * ax + ma[1][c] * ay + mb[0][c] * bx + mb[1][c] * by).to_array();
+                j[2 * c] = v[0];
+                if 2 * c + 1 < POSE_DIM {
+                    j[2 * c + 1] = v[1];
+                }
+            }
+            visit(r.px as usize, alpha[r.px as usize], &j);
+        }
+        self.reset_touched();
+        Ok(())
+    }
+}
