@@ -44,6 +44,7 @@ pub mod optim;
 pub mod raster;
 pub mod so3;
 pub mod symmetry;
+pub mod uncertainty;
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
 

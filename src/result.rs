@@ -10,6 +10,7 @@ use crate::metrics::{pose_errors, PoseErrors};
 use crate::pose::{mat3_to_rows, mat4_to_rows, Pose};
 use crate::so3;
 use crate::symmetry;
+use crate::uncertainty::StdDev;
 use crate::verdict::Verdict;
 use serde::{Deserialize, Serialize};
 
@@ -79,6 +80,16 @@ pub struct FitResult {
     /// Views the verdict doubts.
     #[serde(default)]
     pub doubted_views: Vec<String>,
+    /// The pose covariance, 9×9 rows in `[ω (rad, right tangent: R_true ≈
+    /// R·exp([ω]×)), t (scene units), log s]` (`crate::uncertainty`), once done.
+    #[serde(default)]
+    pub covariance: Option<[[f64; 9]; 9]>,
+    /// Its readable standard deviations, once done.
+    #[serde(default)]
+    pub std_dev: Option<StdDev>,
+    /// Why the uncertainty could not be measured, when it could not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uncertainty_error: Option<String>,
     /// Wall-clock seconds, as measured by the caller.
     pub seconds: f64,
     /// Error figures against the scene's ground truth, when it has one (against its
@@ -118,7 +129,16 @@ impl Estimator {
                 (Some(pose_errors(self.mesh(), &pose, &truth)), Some(syms.len() > 1))
             }
         };
+        // Once done, `pose` is the final pose the uncertainty was measured at.
+        let (covariance, std_dev, uncertainty_error) = match self.uncertainty() {
+            Some(Ok(u)) => (Some(u.covariance_rows()), Some(u.std_dev.clone()), None),
+            Some(Err(e)) => (None, None, Some(e.to_string())),
+            None => (None, None, None),
+        };
         FitResult {
+            covariance,
+            std_dev,
+            uncertainty_error,
             pose: PoseOut::from_pose(&pose),
             matrix: mat4_to_rows(pose.matrix()),
             views,

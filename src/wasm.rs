@@ -18,6 +18,7 @@
 
 mod builder;
 mod files;
+mod next_view;
 mod session;
 
 pub use builder::SessionBuilder;
@@ -72,6 +73,21 @@ export interface Progress {
 }
 /** One view's name and size. */
 export interface ViewInfo { name: string; width: number; height: number; has_image: boolean; }
+/** Readable standard deviations of the pose covariance. */
+export interface StdDev {
+  /** About each model axis, degrees. */
+  rotation_deg: number[];
+  /** Translation, scene units (world axes). */
+  translation: number[];
+  /** Scale along each model axis, % of the scale. */
+  scale_pct: number[];
+  /** The ADD (mean model-point displacement) expected from the covariance and its 95th percentile, scene units. */
+  add_mean: number; add_95: number;
+  /** The object's diameter at the pose, scene units. */
+  diameter: number;
+  /** RMS distance between the model's outline and the masks' contours at the optimum, canvas pixels. */
+  boundary_rms_px: number;
+}
 /** The result of a fit (SPEC §3). */
 export interface FitResult {
   pose: PoseOut; matrix: number[][];
@@ -80,6 +96,12 @@ export interface FitResult {
   termination: null | "converged" | "max_iterations" | "stalled";
   /** "ok", "poor" or "failed", with the reasons and the views it doubts. */
   verdict: null | "ok" | "poor" | "failed"; verdict_reasons: string[]; doubted_views: string[];
+  /** The pose covariance once done: 9×9 rows in [ω (rad; right tangent, R_true ≈ R·exp([ω]×)), t (scene units), log s]. */
+  covariance: number[][] | null;
+  /** Its readable standard deviations once done. */
+  std_dev: StdDev | null;
+  /** Why the uncertainty could not be measured, when it could not. */
+  uncertainty_error?: string;
   seconds: number;
   /** Against the ground truth (its symmetric equivalent closest to the estimate), when given. */
   errors?: Record<string, number>; symmetric?: boolean;

@@ -200,9 +200,83 @@ pub fn synthesize(mesh: &Mesh, settings: &SynthSettings, pose: Option<Pose>) -> 
     })
 }
 
+/// A mask with its boundary displaced along the normal by a smooth random field, as
+/// a segmentation network's error looks: `ν(x)` is bilinear between independent
+/// N(0, σ²) values on a grid of `correlation_px` pixels, and a pixel is object when
+/// its signed distance to the contour (negative inside) is below ν there. σ = 0
+/// returns the mask unchanged. Deterministic for a seed.
+pub fn roughen(mask: &Mask, sigma_px: f64, correlation_px: f64, seed: u64) -> Mask {
+    if sigma_px.is_nan() || sigma_px <= 0.0 || mask.area() == 0 {
+        return mask.clone();
+    }
+    let (w, h) = (mask.width as usize, mask.height as usize);
+    let inside: Vec<bool> = mask.data.iter().map(|&v| v != 0).collect();
+    let outside: Vec<bool> = inside.iter().map(|&v| !v).collect();
+    let to_object = crate::loss::edt::distance(w, h, &inside);
+    let to_background = crate::loss::edt::distance(w, h, &outside);
+    let cell = correlation_px.max(1.0);
+    let (gw, gh) = (
+        (w as f64 / cell).ceil() as usize + 2,
+        (h as f64 / cell).ceil() as usize + 2,
+    );
+    let mut rng = SmallRng::seed_from_u64(seed);
+    let grid: Vec<f64> = (0..gw * gh)
+        .map(|_| {
+            let u: f64 = rng.gen_range(f64::MIN_POSITIVE..1.0);
+            let v: f64 = rng.gen();
+            sigma_px * (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        })
+        .collect();
+    let mut out = Mask::empty(mask.width, mask.height);
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let sd = if inside[i] {
+                0.5 - to_background[i]
+            } else {
+                to_object[i] - 0.5
+            };
+            let (gx, gy) = (x as f64 / cell, y as f64 / cell);
+            let (x0, y0) = (gx.floor() as usize, gy.floor() as usize);
+            let (fx, fy) = (gx - x0 as f64, gy - y0 as f64);
+            let g = |xx: usize, yy: usize| grid[yy * gw + xx];
+            let nu = (1.0 - fy) * ((1.0 - fx) * g(x0, y0) + fx * g(x0 + 1, y0))
+                + fy * ((1.0 - fx) * g(x0, y0 + 1) + fx * g(x0 + 1, y0 + 1));
+            out.data[i] = u8::from(sd < nu);
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn roughen_moves_the_boundary_by_about_sigma_and_keeps_the_shape() {
+        let m = blob_mesh(11, 25);
+        let s = synthesize(
+            &m,
+            &SynthSettings {
+                views: 1,
+                ..Default::default()
+            },
+            None,
+        )
+        .unwrap();
+        let mask = &s.masks[0];
+        assert_eq!(&roughen(mask, 0.0, 8.0, 1), mask);
+        let r = roughen(mask, 1.5, 8.0, 1);
+        let changed = mask.data.iter().zip(&r.data).filter(|(a, b)| a != b).count() as f64;
+        let perimeter = crate::metrics::contour(mask).area() as f64;
+        // Changed pixels ≈ perimeter × mean |ν| (≈ 0.6 σ after bilinear smoothing).
+        assert!(
+            changed > 0.3 * perimeter && changed < 2.5 * perimeter,
+            "{changed} vs {perimeter}"
+        );
+        assert_ne!(roughen(mask, 1.5, 8.0, 2), r);
+        assert!((r.area() as f64 - mask.area() as f64).abs() < 0.1 * mask.area() as f64);
+    }
 
     #[test]
     fn synthetic_scene_keeps_the_object_inside_every_view() {

@@ -270,5 +270,22 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
     for r in &result.verdict_reasons {
         eprintln!("  {r}");
     }
+    match (&result.std_dev, &result.uncertainty_error) {
+        (Some(sd), _) => {
+            let list = |v: &[f64; 3], digits: usize| v.map(|x| format!("{x:.digits$}")).join("/");
+            // Scene units vary (metres, millimetres): three significant digits.
+            eprintln!(
+                "  uncertainty (1 sd): rotation {}° about the model axes, translation {}, scale {}%; ADD within {:.3e} (≈{:.2}% of the diameter) with 95% confidence; boundary rms {:.2} px",
+                list(&sd.rotation_deg, 2),
+                sd.translation.map(|x| format!("{x:.2e}")).join("/"),
+                list(&sd.scale_pct, 2),
+                sd.add_95,
+                100.0 * sd.add_95 / sd.diameter.max(f64::MIN_POSITIVE),
+                sd.boundary_rms_px
+            );
+        }
+        (None, Some(e)) => eprintln!("  uncertainty: not measured: {e}"),
+        (None, None) => {}
+    }
     Ok(if a.strict && verdict != Verdict::Ok { NOT_OK } else { 0 })
 }

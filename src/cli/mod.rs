@@ -9,6 +9,7 @@ mod import;
 mod info;
 mod loss;
 mod render;
+mod suggest;
 mod synth;
 
 use clap::{Parser, Subcommand};
@@ -38,6 +39,9 @@ enum Command {
     Loss(loss::LossArgs),
     /// Time the forward + backward pass and full fits (see BENCHMARKS.md).
     Bench(bench::BenchArgs),
+    /// Rank candidate cameras by how much a photograph from there would shrink the pose
+    /// uncertainty of a fit; print the best as a JSON list of scene-form cameras.
+    SuggestView(suggest::SuggestArgs),
     /// Fit every scene of some folders and write the paper's tables and plots.
     Eval(eval::EvalArgs),
     /// Import a dataset folder (NeRF, BOP) as a scene folder.
@@ -67,6 +71,7 @@ pub fn main() -> i32 {
         Command::Import(cmd) => import::run(&cmd).map(|_| 0),
         Command::Eval(args) => eval::run(&args).map(|_| 0),
         Command::Bench(args) => bench::run(&args).map(|_| 0),
+        Command::SuggestView(args) => suggest::run(&args).map(|_| 0),
         Command::Render { scene, pose, out } => render::run(&scene, &pose, &out).map(|_| 0),
     };
     match result {

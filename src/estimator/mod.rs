@@ -23,6 +23,9 @@ use crate::optim::{init, params};
 use crate::pose::Pose;
 use crate::raster::hard::{self, BitMask};
 use crate::raster::silhouette::RenderMesh;
+use crate::uncertainty::{
+    fit_uncertainty, next_view, rank_views, sphere_candidates, NoiseModel, RankedView, Uncertainty,
+};
 use crate::verdict::{self, Judgement, Verdict};
 use crate::view::View;
 use glam::{DMat3, DVec3};
@@ -103,6 +106,8 @@ struct Final {
     pose: Pose,
     views: Vec<ViewFigures>,
     judgement: Judgement,
+    /// The pose's uncertainty, or why it could not be measured.
+    uncertainty: std::result::Result<Uncertainty, String>,
 }
 
 /// Search candidates scored per step.
@@ -616,7 +621,22 @@ impl Estimator {
         } else {
             Termination::MaxIterations
         });
-        self.done = Some(Final { pose, views, judgement });
+        let uncertainty = fit_uncertainty(
+            &self.model,
+            &self.views,
+            &self.windows,
+            &pose,
+            &t.weights,
+            free_parameters(self.settings.scale_mode),
+            &NoiseModel::default(),
+        )
+        .map_err(|e| e.to_string());
+        self.done = Some(Final {
+            pose,
+            views,
+            judgement,
+            uncertainty,
+        });
         self.objective = None;
         self.phase = Phase::Done;
     }
@@ -688,6 +708,43 @@ impl Estimator {
     /// The verdict and the views it doubts, once done.
     pub fn judgement(&self) -> Option<&Judgement> {
         self.done.as_ref().map(|f| &f.judgement)
+    }
+
+    /// Candidate cameras ranked by how much a photograph from there is predicted to
+    /// shrink the final pose's uncertainty, best first (`candidates`, or 64 viewpoints
+    /// on a sphere around the object: `crate::uncertainty::next_view`).
+    ///
+    /// Errors: the fit is not done, or its uncertainty could not be measured.
+    pub fn suggest_views(&self, candidates: Option<&[crate::camera::Camera]>) -> Result<Vec<RankedView>> {
+        let Some(f) = &self.done else {
+            return Err(Error::Settings("next view: the fit is not done".into()));
+        };
+        let u = f
+            .uncertainty
+            .as_ref()
+            .map_err(|e| Error::Settings(format!("next view: no uncertainty: {e}")))?;
+        let sphere;
+        let candidates = match candidates {
+            Some(c) => c,
+            None => {
+                sphere = sphere_candidates(&self.model, &self.views, &f.pose, next_view::SPHERE)?;
+                &sphere
+            }
+        };
+        rank_views(&self.model, &f.pose, u, candidates, &NoiseModel::default())
+    }
+
+    /// The parameters the fit frees (its scale mode).
+    pub fn free(&self) -> lm::Free {
+        free_parameters(self.settings.scale_mode)
+    }
+
+    /// The final pose's uncertainty once done (`Err` says why it could not be
+    /// measured); `None` before.
+    pub fn uncertainty(&self) -> Option<std::result::Result<&Uncertainty, &str>> {
+        self.done
+            .as_ref()
+            .map(|f| f.uncertainty.as_ref().map_err(|e| e.as_str()))
     }
 
     /// Per-view figures at full resolution for a pose (cached for the final pose).

@@ -110,6 +110,14 @@ impl ContourTarget {
         &self.weight
     }
 
+    /// The signed distance of pixel `i` to the mask's contour, pixels: positive
+    /// outside the mask, negative inside, ±½ at the pixels either side of it (so that
+    /// interpolating between pixel centres puts the contour half-way); 0 for an unknown
+    /// pixel.
+    pub fn signed_distance(&self, i: usize) -> f64 {
+        self.weight[i] * self.norm
+    }
+
     /// The normaliser N = |M|·√(|M|/π), in px³.
     pub fn normaliser(&self) -> f64 {
         self.norm

@@ -50,9 +50,11 @@
 //! m-band. Everything is f64.
 
 mod candidates;
+mod outline;
 mod pass;
 mod topology;
 
+pub use outline::OutlineSample;
 pub use topology::{EdgeTopology, WELD_TOLERANCE};
 
 use crate::camera::{Camera, MAX_SIDE};

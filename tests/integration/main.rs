@@ -13,6 +13,7 @@ mod objective;
 mod occlusion;
 mod real;
 mod soft_raster;
+mod uncertainty;
 
 /// The shared third-party data, `../shared` beside the repository (see its
 /// `data/SOURCES.md`); panics, naming the folder, when it is not there.

@@ -1,0 +1,56 @@
+//! The next-best-view check: for synthetic Duck scenes (seeds FIRST..LAST, 2 views,
+//! 160×120, masks roughened by 1 px), how often adding the top-ranked of 16 sphere
+//! candidates reduces the true ADD more than the median of 5 random candidates
+//! (BENCHMARKS.md "Next best view").
+//!
+//!     cargo run --release --example next_view_rate -- FIRST LAST
+
+use localisebot::app::coverage::{next_view_case, CoverageScenes};
+use localisebot::io;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let first: u64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(300);
+    let last: u64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(319);
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/data/gltf/Duck/glTF-Binary/Duck.glb"
+    );
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let mesh = io::load_mesh(path, &bytes, &|_| None).expect("the Duck loads");
+    let scenes = CoverageScenes {
+        width: 160,
+        height: 120,
+        noise_px: std::env::var("NOISE").ok().and_then(|s| s.parse().ok()).unwrap_or(1.0),
+        correlation_px: 12.0,
+    };
+    let (mut wins, mut n) = (0, 0);
+    for seed in first..=last {
+        match next_view_case(
+            &mesh,
+            seed,
+            &scenes,
+            std::env::var("NV").ok().and_then(|s| s.parse().ok()).unwrap_or(64),
+            5,
+            std::env::var("SPREAD").ok().and_then(|s| s.parse().ok()),
+        ) {
+            Ok(Some(c)) => {
+                n += 1;
+                wins += usize::from(c.top_wins());
+                println!(
+                    "seed {seed}: ADD 2 views {:.5}, + top {:.5}, + random median {:.5} {:?}",
+                    c.add_before,
+                    c.add_top,
+                    c.median_random(),
+                    c.add_random.iter().map(|a| format!("{a:.5}")).collect::<Vec<_>>()
+                );
+            }
+            Ok(None) => println!("seed {seed}: failed fit, not counted"),
+            Err(e) => println!("seed {seed}: error {e}"),
+        }
+    }
+    println!(
+        "top candidate beat the median random one in {wins} of {n} scenes ({:.0}%)",
+        100.0 * wins as f64 / n.max(1) as f64
+    );
+}

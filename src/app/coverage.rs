@@ -1,0 +1,248 @@
+//! Is the reported uncertainty calibrated? Fits synthetic scenes with known truth
+//! (2–4 views, clean or roughened masks) from no initial pose and measures, for each,
+//! the squared Mahalanobis distance of the true error under the reported covariance
+//! and the true ADD against the reported 95 % ADD bound. Used by the coverage test,
+//! `bench` and the calibration of κ (`crate::uncertainty::NoiseModel::inflation`).
+
+use crate::app::synth::{roughen, synthesize, SynthSettings};
+use crate::error::{Error, Result};
+use crate::estimator::{Estimator, FitSettings};
+use crate::mesh::Mesh;
+use crate::metrics;
+use crate::uncertainty::{mahalanobis_sq, pose_error, Mat9, CHI2_9_95};
+use crate::verdict::Verdict;
+use crate::view::View;
+
+/// How the scenes are made.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CoverageScenes {
+    /// Image width and height, pixels.
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// Boundary noise σ of the masks, pixels (0: clean hard renders).
+    pub noise_px: f64,
+    /// Correlation length of the boundary noise, pixels.
+    pub correlation_px: f64,
+}
+
+/// One scene's outcome.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CoverageCase {
+    /// The scene's seed.
+    pub seed: u64,
+    /// Its number of views.
+    pub views: usize,
+    /// `eᵀΣ⁻¹e` of the true error e under the reported Σ.
+    pub mahalanobis_sq: f64,
+    /// The true ADD, scene units.
+    pub add: f64,
+    /// The reported 95 % ADD bound, scene units.
+    pub add_95: f64,
+    /// The true rotation error, degrees.
+    pub rotation_deg: f64,
+    /// The reported rotation standard deviations' norm, degrees.
+    pub rotation_sd_deg: f64,
+}
+
+impl CoverageCase {
+    /// Whether the truth lies inside the 95 % ellipsoid.
+    pub fn inside(&self) -> bool {
+        self.mahalanobis_sq <= CHI2_9_95
+    }
+
+    /// Whether the true ADD is within the reported 95 % bound.
+    pub fn add_inside(&self) -> bool {
+        self.add <= self.add_95
+    }
+}
+
+/// Fits the scene of `seed` (2 + seed mod 3 views) and measures it; `None` when the fit's
+/// verdict is `failed` (it then reports no pose to be sure of).
+///
+/// Errors: the scene cannot be made, or the fit reports no uncertainty.
+pub fn coverage_case(mesh: &Mesh, seed: u64, scenes: &CoverageScenes) -> Result<Option<CoverageCase>> {
+    let views = 2 + (seed % 3) as usize;
+    let settings = SynthSettings {
+        views,
+        width: scenes.width,
+        height: scenes.height,
+        seed,
+        ..Default::default()
+    };
+    let scene = synthesize(mesh, &settings, None)?;
+    let views_v: Vec<View> = scene
+        .views()
+        .into_iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let mask = roughen(v.mask(), scenes.noise_px, scenes.correlation_px, seed * 64 + i as u64);
+            View::new(v.name(), *v.camera(), mask, None, None, &Default::default())
+        })
+        .collect::<Result<_>>()?;
+    let mut est = Estimator::new(mesh.clone(), views_v, None, FitSettings::default())?;
+    est.run(1_000_000)?;
+    if est.judgement().map(|j| j.verdict) == Some(Verdict::Failed) {
+        return Ok(None);
+    }
+    let pose = est.pose();
+    let u = match est.uncertainty() {
+        Some(Ok(u)) => u.clone(),
+        Some(Err(e)) => return Err(Error::Settings(format!("scene {seed}: no uncertainty: {e}"))),
+        None => return Err(Error::Settings(format!("scene {seed}: the fit did not end"))),
+    };
+    let e = pose_error(&pose, &scene.pose);
+    let cov: &Mat9 = &u.covariance;
+    let sd = u.std_dev.rotation_deg;
+    Ok(Some(CoverageCase {
+        seed,
+        views,
+        mahalanobis_sq: mahalanobis_sq(cov, &e, est.free())?,
+        add: metrics::add(mesh, &pose, &scene.pose),
+        add_95: u.std_dev.add_95,
+        rotation_deg: metrics::rotation_error_deg(&pose, &scene.pose),
+        rotation_sd_deg: (sd[0] * sd[0] + sd[1] * sd[1] + sd[2] * sd[2]).sqrt(),
+    }))
+}
+
+/// The fraction of `cases` inside the 95 % ellipsoid and within the ADD bound.
+pub fn coverage(cases: &[CoverageCase]) -> (f64, f64) {
+    let n = cases.len().max(1) as f64;
+    (
+        cases.iter().filter(|c| c.inside()).count() as f64 / n,
+        cases.iter().filter(|c| c.add_inside()).count() as f64 / n,
+    )
+}
+
+/// One scene of the next-best-view check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NextViewCase {
+    /// The scene's seed.
+    pub seed: u64,
+    /// The true ADD of the 2-view fit.
+    pub add_before: f64,
+    /// The true ADD after adding the top-ranked candidate and refitting.
+    pub add_top: f64,
+    /// The true ADDs after adding each random candidate instead.
+    pub add_random: Vec<f64>,
+}
+
+impl NextViewCase {
+    /// The median of the random candidates' ADDs.
+    pub fn median_random(&self) -> f64 {
+        let mut v = self.add_random.clone();
+        v.sort_by(f64::total_cmp);
+        match v.len() {
+            0 => f64::NAN,
+            n if n % 2 == 1 => v[n / 2],
+            n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+        }
+    }
+
+    /// Whether the top candidate beat the median random one.
+    pub fn top_wins(&self) -> bool {
+        self.add_top < self.median_random()
+    }
+}
+
+/// The next-best-view check on the scene of `seed`: a 2-view fit (masks as
+/// `scenes`; the synthetic scene's two cameras, or with `spread_deg` two cameras that
+/// far apart about the object), `candidates` sphere viewpoints ranked, then the fit refined from its pose
+/// with a third view from the top candidate, and again with each of `randoms` other
+/// candidates drawn at random (masks rendered at the truth, roughened alike). `None`
+/// when the 2-view fit fails or is more than 10 % of the diameter off.
+///
+/// Errors: the scene cannot be made or a fit errs.
+pub fn next_view_case(
+    mesh: &Mesh,
+    seed: u64,
+    scenes: &CoverageScenes,
+    candidates: usize,
+    randoms: usize,
+    spread_deg: Option<f64>,
+) -> Result<Option<NextViewCase>> {
+    use crate::uncertainty::sphere_candidates;
+    use rand::seq::SliceRandom;
+    use rand::SeedableRng;
+    let settings = SynthSettings {
+        views: 2,
+        width: scenes.width,
+        height: scenes.height,
+        seed,
+        ..Default::default()
+    };
+    let mut scene = synthesize(mesh, &settings, None)?;
+    if let Some(spread) = spread_deg {
+        // Two stops of an arm on one side of the object: view 1 is view 0 turned by
+        // `spread` about view 0's image-up through the object's centre.
+        let c0 = scene.cameras[0];
+        let centre = mesh
+            .bounds()
+            .map_or(scene.pose.translation, |b| scene.pose.apply(b.centre()));
+        let up = -(c0.rotation.transpose() * glam::DVec3::Y);
+        let eye = centre + glam::DQuat::from_axis_angle(up, spread.to_radians()) * (c0.centre() - centre);
+        let mut c1 = crate::camera::Camera::look_at(eye, centre, up, c0.width, c0.height, c0.fx);
+        c1.cx = c0.cx;
+        c1.cy = c0.cy;
+        scene.cameras[1] = c1;
+    }
+    let make_view = |name: &str, cam: crate::camera::Camera, salt: u64| -> Result<View> {
+        let mask = crate::raster::hard::render(mesh, &scene.pose, &cam);
+        let mask = roughen(&mask, scenes.noise_px, scenes.correlation_px, seed * 64 + salt);
+        View::new(name, cam, mask, None, None, &Default::default())
+    };
+    let views: Vec<View> = scene
+        .cameras
+        .iter()
+        .enumerate()
+        .map(|(i, c)| make_view(&format!("view{i}"), *c, i as u64))
+        .collect::<Result<_>>()?;
+    let mut est = Estimator::new(mesh.clone(), views.clone(), None, FitSettings::default())?;
+    est.run(1_000_000)?;
+    if est.judgement().map(|j| j.verdict) == Some(Verdict::Failed) {
+        return Ok(None);
+    }
+    let fitted = est.pose();
+    // A 2-view fit that did not find the object (ADD above the usual 10 % of the
+    // diameter) has no uncertainty worth planning with: not counted.
+    if metrics::pose_errors(mesh, &fitted, &scene.pose).add_rel > 0.1 {
+        return Ok(None);
+    }
+    let model = crate::raster::silhouette::RenderMesh::new(mesh.clone());
+    let cams = sphere_candidates(&model, &views, &fitted, candidates)?;
+    let ranked = est.suggest_views(Some(&cams))?;
+    let usable: Vec<usize> = ranked
+        .iter()
+        .filter(|r| r.predicted_add_rms.is_finite())
+        .map(|r| r.index)
+        .collect();
+    let Some((&top, rest)) = usable.split_first() else {
+        return Err(Error::Settings(format!("scene {seed}: no candidate sees the object")));
+    };
+    let mut rng = rand::rngs::SmallRng::seed_from_u64(seed ^ 0x6e62_7620);
+    let picks: Vec<usize> = rest.choose_multiple(&mut rng, randoms).copied().collect();
+    let refit = |i: usize| -> Result<Option<f64>> {
+        let mut v = views.clone();
+        // The candidate may not see the truth whole (it was placed around the fit).
+        let Ok(extra) = make_view("next", cams[i], 32 + i as u64) else {
+            return Ok(None);
+        };
+        v.push(extra);
+        let mut e = Estimator::new(mesh.clone(), v, Some(fitted), FitSettings::default())?;
+        e.run(1_000_000)?;
+        Ok(Some(metrics::add(mesh, &e.pose(), &scene.pose)))
+    };
+    let Some(add_top) = refit(top)? else {
+        return Ok(None);
+    };
+    let add_random = picks
+        .iter()
+        .filter_map(|&i| refit(i).transpose())
+        .collect::<Result<Vec<f64>>>()?;
+    Ok(Some(NextViewCase {
+        seed,
+        add_before: metrics::add(mesh, &fitted, &scene.pose),
+        add_top,
+        add_random,
+    }))
+}

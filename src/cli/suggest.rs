@@ -1,0 +1,141 @@
+//! `localisebot suggest-view SCENE RESULT [--candidates CAMERAS.json] [--top K]`: the
+//! next photograph to take. Ranks candidate cameras (default: 64 viewpoints on a sphere
+//! around the object at the views' mean distance, looking at it, with view 0's
+//! intrinsics) by the predicted pose uncertainty after adding a photograph from there
+//! (`localisebot::uncertainty::next_view`), prints the best K on standard output as a
+//! JSON list of camera objects in the scene file's form (best first, ready to add to
+//! the scene), and their predicted figures on standard error.
+
+use super::files::{load_pose, load_scene_file, read_text, to_json, CliResult};
+use clap::Args;
+use localisebot::loss::target::Window;
+use localisebot::optim::lm::Free;
+use localisebot::raster::silhouette::RenderMesh;
+use localisebot::uncertainty::{suggest_views, NoiseModel};
+use localisebot::{Camera, CameraJson, FitSettings};
+use std::path::{Path, PathBuf};
+
+/// `suggest-view`'s arguments.
+#[derive(Args, Debug)]
+pub struct SuggestArgs {
+    /// The scene file that was fitted.
+    pub scene: PathBuf,
+    /// The fit's result file (or a pose file): the pose to plan from. Views its
+    /// verdict doubts are left out.
+    pub result: PathBuf,
+    /// Candidate cameras: a JSON list of camera objects (scene-file form), or of
+    /// objects with a "camera" key, or a scene file whose views' cameras are taken.
+    #[arg(long)]
+    pub candidates: Option<PathBuf>,
+    /// How many cameras to print (default 3).
+    #[arg(long, default_value_t = 3)]
+    pub top: usize,
+}
+
+/// Runs `suggest-view`.
+pub fn run(a: &SuggestArgs) -> CliResult<()> {
+    let scene = load_scene_file(&a.scene)?;
+    let pose = load_pose(&a.result)?;
+    let doubted = doubted_views(&a.result)?;
+    let candidates = match &a.candidates {
+        Some(p) => Some(load_cameras(p)?),
+        None => None,
+    };
+    let settings = FitSettings::default();
+    let windows: Vec<Window> = scene
+        .views
+        .iter()
+        .map(|v| Window::for_view(v, settings.window))
+        .collect();
+    let weights: Vec<f64> = scene
+        .views
+        .iter()
+        .map(|v| {
+            if doubted.iter().any(|d| d == v.name()) {
+                0.0
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let model = RenderMesh::new(scene.mesh.clone());
+    let ranked = suggest_views(
+        &model,
+        &scene.views,
+        &windows,
+        &pose,
+        &weights,
+        Free::All,
+        candidates.as_deref(),
+        &NoiseModel::default(),
+    )
+    .map_err(|e| format!("{}: {e}", a.scene.display()))?;
+    let usable: Vec<_> = ranked.iter().filter(|r| r.predicted_add_rms.is_finite()).collect();
+    if usable.is_empty() {
+        return Err(format!(
+            "{}: none of the {} candidate cameras sees the whole object in front of it",
+            a.scene.display(),
+            ranked.len()
+        ));
+    }
+    let best: Vec<_> = usable.iter().take(a.top.max(1)).collect();
+    eprintln!(
+        "{} candidates ({}), {} see the whole object; expected RMS ADD now {:.4e}",
+        ranked.len(),
+        if candidates.is_some() { "given" } else { "sphere" },
+        usable.len(),
+        ranked[0].current_add_rms
+    );
+    for (k, r) in best.iter().enumerate() {
+        eprintln!(
+            "  {}. candidate {}: expected RMS ADD with it {:.4e} ({:.0}% of now), outline {:.0} px",
+            k + 1,
+            r.index,
+            r.predicted_add_rms,
+            100.0 * r.predicted_add_rms / r.current_add_rms.max(f64::MIN_POSITIVE),
+            r.outline_px
+        );
+    }
+    let out: Vec<CameraJson> = best.iter().map(|r| CameraJson::from_camera(&r.camera)).collect();
+    println!("{}", to_json(&out));
+    Ok(())
+}
+
+/// The views a result file's verdict doubts (none for a pose file).
+fn doubted_views(path: &Path) -> CliResult<Vec<String>> {
+    let text = read_text(path)?;
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(value
+        .get("doubted_views")
+        .and_then(|d| d.as_array())
+        .map(|a| a.iter().filter_map(|v| v.as_str().map(str::to_string)).collect())
+        .unwrap_or_default())
+}
+
+/// Cameras from a JSON list (of cameras or of objects with "camera") or a scene file.
+fn load_cameras(path: &Path) -> CliResult<Vec<Camera>> {
+    let name = path.display().to_string();
+    let text = read_text(path)?;
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{name}: {e}"))?;
+    let list = match &value {
+        serde_json::Value::Array(a) => a.clone(),
+        serde_json::Value::Object(o) => match o.get("views").and_then(|v| v.as_array()) {
+            Some(v) => v.clone(),
+            None => return Err(format!("{name}: expected a JSON list of cameras or a scene file")),
+        },
+        _ => return Err(format!("{name}: expected a JSON list of cameras or a scene file")),
+    };
+    if list.is_empty() {
+        return Err(format!("{name}: no candidate cameras"));
+    }
+    list.iter()
+        .enumerate()
+        .map(|(i, item)| {
+            let cam = item.get("camera").unwrap_or(item);
+            let json: CameraJson =
+                serde_json::from_value(cam.clone()).map_err(|e| format!("{name}: candidate {i}: {e}"))?;
+            json.to_camera(&format!("candidate {i}"))
+                .map_err(|e| format!("{name}: {e}"))
+        })
+        .collect()
+}

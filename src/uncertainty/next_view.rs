@@ -1,0 +1,257 @@
+//! Where to look next: candidate cameras ranked by how much a photograph from there
+//! is predicted to shrink the pose uncertainty.
+//!
+//! A candidate's outline at the fitted pose gives its information `H_c`
+//! ([`outline_information`]); assuming its mask carries the views' mean noise power
+//! `p` (σ²λ, module doc of `crate::uncertainty`), the covariance with it added is
+//! `Σ' = κ (H + H_c)⁻¹ (B + p·H_c) (H + H_c)⁻¹` and the candidate's score is the
+//! expected squared ADD under Σ', `tr(W Σ')` (W the ADD metric, [`add_metric`]):
+//! the smaller, the better. Candidates that do not see the whole object in front of
+//! them are ranked last (an object cut by the frame gives a truncated outline).
+
+use super::{add_metric, outline_information, sandwich, Mat9, NoiseModel, Uncertainty};
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::loss::target::Window;
+use crate::pose::Pose;
+use crate::raster::hard;
+use crate::raster::silhouette::RenderMesh;
+use crate::view::View;
+use glam::DVec3;
+
+/// Margin of a candidate's object window, as a fraction of the silhouette's box.
+const MARGIN: f64 = 0.3;
+/// The long side of a candidate's canvas, at most.
+const RESOLUTION: u32 = 512;
+
+/// A candidate camera with its predicted effect.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RankedView {
+    /// Index of the candidate in the list given.
+    pub index: usize,
+    /// The camera (OpenCV axes, the candidate's intrinsics).
+    pub camera: Camera,
+    /// The expected RMS ADD after adding a photograph from here, scene units
+    /// (infinite when the candidate does not see the object whole).
+    pub predicted_add_rms: f64,
+    /// The expected RMS ADD now, scene units, for comparison.
+    pub current_add_rms: f64,
+    /// The object's outline length in the candidate's window, pixels.
+    pub outline_px: f64,
+}
+
+/// `count` viewpoints evenly spread on the sphere (a Fibonacci lattice) around the
+/// object at `pose`, at the views' mean distance from it, looking at it, with the
+/// intrinsics of view 0 and image-up along view 0's.
+///
+/// Errors: no views.
+pub fn sphere_candidates(model: &RenderMesh, views: &[View], pose: &Pose, count: usize) -> Result<Vec<Camera>> {
+    let first = views
+        .first()
+        .ok_or_else(|| Error::Settings("next view: the scene has no views".into()))?
+        .camera();
+    let centre = model.mesh.bounds().map_or(pose.translation, |b| pose.apply(b.centre()));
+    let distance = views.iter().map(|v| v.camera().centre().distance(centre)).sum::<f64>() / views.len() as f64;
+    // View 0's image-up in the world: −y of its camera axes.
+    let up = -(first.rotation.transpose() * DVec3::Y);
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let n = count.max(1);
+    Ok((0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let a = golden * i as f64;
+            // A lattice about view 0's up, so that its poles are above and below.
+            let (e1, e2) = up.any_orthonormal_pair();
+            let dir = up * z + (e1 * a.cos() + e2 * a.sin()) * r;
+            let eye = centre + dir * distance;
+            let mut cam = Camera::look_at(eye, centre, up, first.width, first.height, first.fx);
+            cam.fy = first.fy;
+            cam.cx = first.cx;
+            cam.cy = first.cy;
+            cam
+        })
+        .collect())
+}
+
+/// Ranks `candidates` for the fit at `pose` whose uncertainty is `u` (module doc),
+/// best first.
+///
+/// Errors: the fit's information constrains nothing, or a render fails.
+pub fn rank_views(
+    model: &RenderMesh,
+    pose: &Pose,
+    u: &Uncertainty,
+    candidates: &[Camera],
+    noise: &NoiseModel,
+) -> Result<Vec<RankedView>> {
+    let w = add_metric(&model.mesh, pose);
+    let expected = |cov: &Mat9| (w * cov).trace().max(0.0).sqrt();
+    let current = expected(&u.covariance);
+    let mut ranked = Vec::with_capacity(candidates.len());
+    for (index, cam) in candidates.iter().enumerate() {
+        let mut out = RankedView {
+            index,
+            camera: *cam,
+            predicted_add_rms: f64::INFINITY,
+            current_add_rms: current,
+            outline_px: 0.0,
+        };
+        if let Some(canvas) = object_canvas(model, pose, cam) {
+            let (hc, length) = outline_information(model, pose, &canvas, noise)?;
+            let cov = sandwich(&(u.information + hc), &(u.noise + hc * u.noise_power), u.free, noise)?;
+            out.predicted_add_rms = expected(&cov);
+            out.outline_px = length;
+        }
+        ranked.push(out);
+    }
+    ranked.sort_by(|a, b| {
+        a.predicted_add_rms
+            .total_cmp(&b.predicted_add_rms)
+            .then(a.index.cmp(&b.index))
+    });
+    Ok(ranked)
+}
+
+/// The fit at `pose` to `views` (seen through `windows`, weighted by `weights`, over
+/// `free`): its uncertainty, then `candidates` ranked (default: 64 sphere viewpoints,
+/// [`sphere_candidates`]), best first.
+///
+/// Errors: as [`fit_uncertainty`] and [`rank_views`].
+#[allow(clippy::too_many_arguments)]
+pub fn suggest_views(
+    model: &RenderMesh,
+    views: &[View],
+    windows: &[Window],
+    pose: &Pose,
+    weights: &[f64],
+    free: crate::optim::lm::Free,
+    candidates: Option<&[Camera]>,
+    noise: &NoiseModel,
+) -> Result<Vec<RankedView>> {
+    let u = super::fit_uncertainty(model, views, windows, pose, weights, free, noise)?;
+    let sphere;
+    let candidates = match candidates {
+        Some(c) => c,
+        None => {
+            sphere = sphere_candidates(model, views, pose, SPHERE)?;
+            &sphere
+        }
+    };
+    rank_views(model, pose, &u, candidates, noise)
+}
+
+/// The default number of sphere candidates.
+pub const SPHERE: usize = 64;
+
+/// The canvas camera of `cam`'s object window at `pose`, or `None` when the object is
+/// not whole and in front of the camera.
+fn object_canvas(model: &RenderMesh, pose: &Pose, cam: &Camera) -> Option<Camera> {
+    let in_front = model
+        .mesh
+        .positions
+        .iter()
+        .all(|&p| cam.to_camera(pose.apply(p)).z > 1e-9);
+    if !in_front {
+        return None;
+    }
+    let mask = hard::render(&model.mesh, pose, cam);
+    if mask.area() == 0 || mask.touches_border() {
+        return None;
+    }
+    let window = Window::around_mask(&mask, MARGIN)?;
+    let (w, h) = window.canvas(RESOLUTION);
+    Some(window.camera(cam, w, h))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::synth::{synthesize, SynthSettings};
+    use crate::optim::lm::Free;
+    use crate::uncertainty::fit_uncertainty;
+
+    #[test]
+    fn sphere_candidates_look_at_the_object_from_the_views_distance() {
+        let mesh = crate::app::synth::blob_mesh(10, 14);
+        let s = synthesize(
+            &mesh,
+            &SynthSettings {
+                views: 2,
+                ..Default::default()
+            },
+            None,
+        )
+        .unwrap();
+        let model = RenderMesh::new(mesh);
+        let views = s.views();
+        let cams = sphere_candidates(&model, &views, &s.pose, 32).unwrap();
+        assert_eq!(cams.len(), 32);
+        let c = s.pose.apply(model.mesh.bounds().unwrap().centre());
+        let d0 = views.iter().map(|v| v.camera().centre().distance(c)).sum::<f64>() / 2.0;
+        for cam in &cams {
+            assert!((cam.centre().distance(c) - d0).abs() < 1e-9 * d0);
+            let p = cam.project(cam.to_camera(c));
+            assert!((p - glam::DVec2::new(cam.cx, cam.cy)).length() < 1e-6, "{p:?}");
+        }
+        // Spread: no two candidates closer than a third of the lattice's spacing.
+        let spacing = (4.0 * std::f64::consts::PI / 32.0).sqrt();
+        for (i, a) in cams.iter().enumerate() {
+            for b in &cams[i + 1..] {
+                let (da, db) = ((a.centre() - c).normalize(), (b.centre() - c).normalize());
+                assert!(da.angle_between(db) > spacing / 3.0);
+            }
+        }
+    }
+
+    #[test]
+    fn a_view_along_the_existing_one_helps_less_than_a_view_across_it() {
+        // One view constrains depth (and scale) poorly; a second view at 90° fixes it,
+        // a second view beside the first hardly does.
+        let mesh = crate::app::synth::blob_mesh(10, 14);
+        let s = synthesize(
+            &mesh,
+            &SynthSettings {
+                views: 1,
+                ..Default::default()
+            },
+            None,
+        )
+        .unwrap();
+        let model = RenderMesh::new(mesh);
+        let views = s.views();
+        let windows = [Window::for_view(
+            &views[0],
+            crate::loss::target::WindowMode::Object { margin: 0.3 },
+        )];
+        let noise = NoiseModel::default();
+        let u = fit_uncertainty(&model, &views, &windows, &s.pose, &[1.0], Free::All, &noise).unwrap();
+        let c = s.pose.apply(model.mesh.bounds().unwrap().centre());
+        let cam0 = views[0].camera();
+        let eye0 = cam0.centre() - c;
+        let up = -(cam0.rotation.transpose() * DVec3::Y);
+        let beside = glam::DQuat::from_axis_angle(up, 5f64.to_radians()) * eye0;
+        let across = glam::DQuat::from_axis_angle(up, 90f64.to_radians()) * eye0;
+        let make = |e: DVec3| {
+            let mut k = Camera::look_at(c + e, c, up, cam0.width, cam0.height, cam0.fx);
+            k.cx = cam0.cx;
+            k.cy = cam0.cy;
+            k
+        };
+        let behind = Camera::look_at(c + eye0, c + eye0 * 2.0, up, cam0.width, cam0.height, cam0.fx);
+        let ranked = rank_views(&model, &s.pose, &u, &[make(beside), make(across), behind], &noise).unwrap();
+        assert_eq!(ranked[0].index, 1, "{ranked:?}");
+        assert_eq!(ranked[1].index, 0);
+        assert!(
+            ranked[0].predicted_add_rms < 0.5 * ranked[1].predicted_add_rms,
+            "{ranked:?}"
+        );
+        assert!(
+            ranked[1].predicted_add_rms <= ranked[1].current_add_rms * 1.0001,
+            "{ranked:?}"
+        );
+        // The camera looking away from the object is last and marked unusable.
+        assert_eq!(ranked[2].index, 2);
+        assert!(ranked[2].predicted_add_rms.is_infinite());
+    }
+}
