@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The README's first command: builds the wasm package into www/pkg/ and the page's
 # examples into www/examples/ (scripts/build-examples.sh: the procedural toy aeroplane,
-# and the Duck when ../shared sits beside the repository), then serves www/ on
+# and the Duck when ../shared sits beside the repository) and copies three.js into
+# www/vendor/ for the 3D view (scripts/build-vendor.sh), then serves www/ on
 # http://127.0.0.1:8080/ (PORT=... to change), where "Load example" is one click away.
 # Installs the wasm target and the matching wasm-bindgen CLI first if missing (a few
 # minutes, once). Ctrl-C stops the server.
@@ -17,6 +18,7 @@ if ! wasm-bindgen --version 2>/dev/null | grep -qx "wasm-bindgen ${WB:-0.2.130}"
 fi
 bash scripts/build-wasm.sh
 bash scripts/build-examples.sh
+bash scripts/build-vendor.sh
 PORT=${PORT:-8080}
 echo "LocaliseBot: open http://127.0.0.1:$PORT/ and click 'Load example' (Ctrl-C stops the server)"
 exec node scripts/serve.mjs --root www --host 127.0.0.1 --port "$PORT"

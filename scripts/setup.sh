@@ -21,6 +21,10 @@ fi
 if [ -f tests/e2e/package.json ] && [ ! -d tests/e2e/node_modules/playwright-core ]; then
   (cd tests/e2e && npm ci --no-audit --no-fund --loglevel=error)
 fi
+# three.js for the page's 3D view (vendor/package.json, copied by scripts/build-vendor.sh).
+if [ -f vendor/package.json ] && [ ! -d vendor/node_modules/three ]; then
+  npm ci --prefix vendor --no-audit --no-fund --loglevel=error
+fi
 # wasm-pack runs the wasm tests as users of the crate would (about 2.5 min to build).
 if ! command -v wasm-pack >/dev/null; then
   cargo install wasm-pack --locked

@@ -58,7 +58,9 @@ step "wasm tests in Node" wasm_tests node wasm_node
 step "wasm tests in Node on the shared glTF files" wasm_tests node wasm_shared
 step "the wasm package (www/pkg)" bash scripts/build-wasm.sh
 step "the page's examples (www/examples)" bash scripts/build-examples.sh
+step "the page's browser libraries (www/vendor: three.js)" bash scripts/build-vendor.sh
 step "the web page, end to end (Playwright + Chromium)" node tests/e2e/page.test.mjs
+step "the page's 3D view, end to end (Playwright + Chromium, WebGL on SwiftShader)" node tests/e2e/view3d.test.mjs
 step "the npm package (pkg-config/): build, npm pack, load in Node" \
   bash -c 'bash pkg-config/build.sh && node pkg-config/smoke.mjs'
 

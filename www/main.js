@@ -37,6 +37,7 @@ const handlers = {
     state = 'ready';
     updateButtons();
   },
+  view3d: (msg) => to3d(msg),
   frame(msg) {
     if (state === 'running' && !msg.running) state = msg.progress.done ? 'done' : 'paused';
     if (msg.progress.done) state = 'done';
@@ -207,6 +208,7 @@ function paint() {
   showVerdict(p);
   drawLoss(msg.losses);
   showPose(p.pose);
+  to3d({ pose: p.pose });
   ui.status.textContent = statusText(p);
   paintCount++;
   ui.status.dataset.paints = paintCount;
@@ -280,6 +282,25 @@ function drawLoss(losses) {
   ctx.fillText(`${10 ** hi < 0.01 ? (10 ** hi).toExponential(1) : (10 ** hi).toFixed(3)}`, 2, pad - 6);
   ctx.fillText(`${(10 ** ys.at(-1)).toFixed(4)} (${ys.length} iterations)`, 2, c.height - 4);
 }
+
+// ---- 3D view (www/view3d.js, three.js) ------------------------------------------
+// Loaded on its own: without it (or without WebGL) the page works, and says so there.
+// Messages for it wait until it is there; the last of each kind is what counts.
+const scene3dState = { view: null, waiting: {} };
+function to3d(msg) {
+  if (msg.error) console.warn(`3D view: ${msg.error}`);
+  if (scene3dState.view) scene3dState.view.apply(msg);
+  else Object.assign(msg.scene ? (scene3dState.waiting = {}) : scene3dState.waiting, msg);
+}
+import('./view3d.js')
+  .then(({ mountView3d }) => mountView3d($('view3d')))
+  .then((view) => {
+    scene3dState.view = view;
+    view.apply(scene3dState.waiting);
+  })
+  .catch((e) => {
+    $('view3d').textContent = `3D view unavailable: ${e.message}`;
+  });
 
 startWorker();
 updateButtons();

@@ -4,7 +4,8 @@
 // Messages in: load {files}, example {path}, start, pause, step, reset, result,
 // view {full}. Messages out: loaded {views, warnings},
 // frame {progress, losses, overlays, size, running},
-// result {json}, error {message, fatal}. Every error — a load, a command, or a slice
+// result {json}, error {message, fatal}, view3d {scene | covariance, suggestions}
+// (the 3D view's, at the end of this file). Every error — a load, a command, or a slice
 // of the fitting loop — is caught and posted as an error, and the loop stops.
 import init, { FileSet, Session, sceneFiles, meshFiles } from './pkg/localisebot.js';
 
@@ -35,6 +36,7 @@ function frame(progress = session.progress()) {
   }
   const size = fullFrame ? null : WINDOW_PX;
   post({ type: 'frame', progress, losses, overlays, size, running }, [losses.buffer, ...overlays]);
+  done3d(progress);
 }
 
 // files: [{ path, bytes }], as dropped or fetched.
@@ -50,6 +52,7 @@ function load(files) {
     set.free();
   }
   post({ type: 'loaded', views: session.views(), warnings: session.warnings() });
+  scene3d();
   frame();
 }
 
@@ -113,6 +116,44 @@ const handlers = {
     if (session) frame();
   },
 };
+
+// ---- 3D view (www/view3d.js) --------------------------------------------------------
+// After a load: the mesh for display, the cameras and each view's picture. When the
+// fit is done: the result's covariance (null until the result has one) and, when the
+// wasm has Session.suggestViews, the 3 best next views. When it is no longer done
+// (Reset), both are cleared. A failure here is reported to the page's 3D view only.
+const PICTURE_PX = 512; // longest side of a view's picture on its image plane
+let finished3d = false;
+
+function scene3d() {
+  finished3d = false;
+  try {
+    const geometry = session.geometry();
+    const cameras = session.cameras();
+    const pictures = cameras.map((_, i) => session.viewPicture(i, PICTURE_PX));
+    post({ type: 'view3d', scene: { geometry, cameras, pictures } },
+      [geometry.positions.buffer, geometry.indices.buffer, ...pictures.map((p) => p.rgba.buffer)]);
+  } catch (e) {
+    post({ type: 'view3d', error: e?.message ?? String(e) });
+  }
+}
+
+function done3d(progress) {
+  if (progress.done === finished3d) return;
+  finished3d = progress.done;
+  if (!progress.done) {
+    post({ type: 'view3d', covariance: null, suggestions: null });
+    return;
+  }
+  const msg = { type: 'view3d', covariance: null, suggestions: null };
+  try {
+    msg.covariance = session.result().covariance ?? null;
+    if (typeof session.suggestViews === 'function') msg.suggestions = session.suggestViews(3);
+  } catch (e) {
+    msg.error = e?.message ?? String(e);
+  }
+  post(msg);
+}
 
 onmessage = async ({ data }) => {
   try {

@@ -167,11 +167,12 @@ async function ious(page) {
   });
 }
 
-// Per canvas: how many pixels differ from its first pixel, and how many are in the
-// overlay's contour colours.
+// Per 2D canvas (the views' and the loss curve's; the 3D view's is WebGL, see
+// view3d.test.mjs): how many pixels differ from its first pixel, and how many are in
+// the overlay's contour colours.
 function canvasStats(page) {
   return page.evaluate(() =>
-    [...document.querySelectorAll('canvas')].map((c) => {
+    [...document.querySelectorAll('.view canvas, #loss')].map((c) => {
       const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
       let varied = 0, magenta = 0, green = 0, ink = 0;
       for (let i = 0; i < d.length; i += 4) {

@@ -10,6 +10,8 @@
 //! `tests/wasm_parity.rs` records and checks natively. Real glTF files of `../shared`
 //! are parsed in wasm by `tests/wasm_shared.rs`.
 
+mod scene_view;
+
 use glam::DMat3;
 use localisebot::app::grasp::antipodal_grasps;
 use localisebot::app::shapes::toy_plane;
