@@ -5,7 +5,7 @@
 //! against the symmetric equivalent of the truth closest to the estimate, so that
 //! the command line, the page and `eval` report the same figures.
 
-use crate::estimator::{Estimator, Termination};
+use crate::estimator::{CameraCorrection, Estimator, Termination};
 use crate::metrics::{pose_errors, PoseErrors};
 use crate::pose::{mat3_to_rows, mat4_to_rows, Pose};
 use crate::so3;
@@ -90,6 +90,12 @@ pub struct FitResult {
     /// Why the uncertainty could not be measured, when it could not.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncertainty_error: Option<String>,
+    /// Each view's camera correction, when the fit was asked to refine the cameras.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_corrections: Option<Vec<CameraCorrection>>,
+    /// Why the cameras could not be corrected, when they could not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_correction_error: Option<String>,
     /// Wall-clock seconds, as measured by the caller.
     pub seconds: f64,
     /// Error figures against the scene's ground truth, when it has one (against its
@@ -135,7 +141,14 @@ impl Estimator {
             Some(Err(e)) => (None, None, Some(e.to_string())),
             None => (None, None, None),
         };
+        let (camera_corrections, camera_correction_error) = match self.camera_corrections() {
+            Some(Ok(c)) => (Some(c.to_vec()), None),
+            Some(Err(e)) => (None, Some(e.to_string())),
+            None => (None, None),
+        };
         FitResult {
+            camera_corrections,
+            camera_correction_error,
             covariance,
             std_dev,
             uncertainty_error,

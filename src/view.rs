@@ -131,6 +131,19 @@ impl View {
         &self.camera
     }
 
+    /// The same view seen through other extrinsics (a corrected camera): the
+    /// intrinsics, the size, the masks and the image stay.
+    pub fn with_extrinsics(&self, rotation: glam::DMat3, translation: glam::DVec3) -> View {
+        View {
+            camera: Camera {
+                rotation,
+                translation,
+                ..self.camera
+            },
+            ..self.clone()
+        }
+    }
+
     /// The object's mask, the camera's size.
     pub fn mask(&self) -> &Mask {
         &self.mask

@@ -17,9 +17,11 @@
 //! - `session`: [`Session`], the fit as JavaScript drives it;
 //! - `scene_view`: what the page's 3D view draws, a second `impl Session` block
 //!   (`geometry`, `cameras`, `viewPicture`);
-//! - `next_view`: `Session.suggestViews`, the cameras for the next photograph.
+//! - `next_view`: `Session.suggestViews`, the cameras for the next photograph;
+//! - `cameras`: `Session.setRefineCameras`, the camera-correction switch.
 
 mod builder;
+mod cameras;
 mod files;
 mod next_view;
 mod scene_view;
@@ -78,6 +80,16 @@ export interface Progress {
 }
 /** One view's name and size. */
 export interface ViewInfo { name: string; width: number; height: number; has_image: boolean; }
+/** One view's camera correction, in its camera's frame. */
+export interface CameraCorrection {
+  view: string;
+  /** Rotation vector, degrees; translation, scene units. */
+  rotation_deg: number[]; translation: number[];
+  /** Its angle (degrees) and its shift as a % of the camera's distance to the object. */
+  angle_deg: number; shift_pct: number;
+  /** The corrected world-to-camera 4×4, rows. */
+  world_to_camera: number[][];
+}
 /** Readable standard deviations of the pose covariance. */
 export interface StdDev {
   /** About each model axis, degrees. */
@@ -107,6 +119,10 @@ export interface FitResult {
   std_dev: StdDev | null;
   /** Why the uncertainty could not be measured, when it could not. */
   uncertainty_error?: string;
+  /** Each view's camera correction (camera frame), with setRefineCameras(true). */
+  camera_corrections?: CameraCorrection[];
+  /** Why the cameras could not be corrected, when they could not. */
+  camera_correction_error?: string;
   seconds: number;
   /** Against the ground truth (its symmetric equivalent closest to the estimate), when given. */
   errors?: Record<string, number>; symmetric?: boolean;

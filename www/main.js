@@ -38,6 +38,7 @@ const handlers = {
     updateButtons();
   },
   view3d: (msg) => to3d(msg),
+  cameras: (msg) => showCorrections(msg),
   frame(msg) {
     if (state === 'running' && !msg.running) state = msg.progress.done ? 'done' : 'paused';
     if (msg.progress.done) state = 'done';
@@ -160,6 +161,19 @@ ui.reset.addEventListener('click', () => {
 ui.download.addEventListener('click', () => send('result'));
 // Each view shows its object window by default; the toggle shows the whole image.
 ui.fullFrame.addEventListener('change', () => send('view', { full: ui.fullFrame.checked }));
+$('refine-cameras').addEventListener('change', (e) => send('cameras', { on: e.target.checked }));
+
+// The camera corrections of a fit done with "refine cameras" (or why there are none).
+function showCorrections({ corrections, error }) {
+  const el = $('camera-corrections');
+  el.hidden = !corrections && !error;
+  el.textContent = error
+    ? `Cameras not corrected: ${error}`
+    : (corrections ?? [])
+        .map((c) => `${c.view}: ${c.angle_deg.toFixed(2)}°, ${c.shift_pct.toFixed(2)} % of its distance`)
+        .join(' · ')
+        .replace(/^/, corrections?.length ? 'Camera corrections — ' : '');
+}
 
 function updateButtons() {
   const loaded = state !== 'empty';

@@ -2,7 +2,7 @@
 // waits for it. Which dropped file is the scene, the mesh, a mask or an image is
 // decided in Rust (Session.fromFiles); this file only moves bytes and messages.
 // Messages in: load {files}, example {path}, start, pause, step, reset, result,
-// view {full}. Messages out: loaded {views, warnings},
+// view {full}, cameras {on}. Messages out: loaded {views, warnings},
 // frame {progress, losses, overlays, size, running},
 // result {json}, error {message, fatal}, view3d {scene | covariance, suggestions}
 // (the 3D view's, at the end of this file). Every error — a load, a command, or a slice
@@ -15,6 +15,7 @@ const ready = init();
 let session = null;
 let running = false;
 let fullFrame = false; // overlays of the whole image instead of each view's object window
+let refineCameras = false; // correct each view's camera jointly with the pose
 
 const post = (msg, transfer = []) => postMessage(msg, transfer);
 
@@ -48,6 +49,7 @@ function load(files) {
     const next = Session.fromFiles(set); // throws an Error naming what is missing
     session?.free();
     session = next;
+    session.setRefineCameras(refineCameras);
   } finally {
     set.free();
   }
@@ -110,6 +112,10 @@ const handlers = {
     session.reset();
     frame();
   },
+  cameras: (msg) => {
+    refineCameras = Boolean(msg.on);
+    if (session && !session.done) session.setRefineCameras(refineCameras);
+  },
   result: () => session && post({ type: 'result', json: session.resultJson() }),
   view: (msg) => {
     fullFrame = Boolean(msg.full);
@@ -143,11 +149,14 @@ function done3d(progress) {
   finished3d = progress.done;
   if (!progress.done) {
     post({ type: 'view3d', covariance: null, suggestions: null });
+    post({ type: 'cameras', corrections: null, error: null });
     return;
   }
   const msg = { type: 'view3d', covariance: null, suggestions: null };
   try {
-    msg.covariance = session.result().covariance ?? null;
+    const result = session.result();
+    msg.covariance = result.covariance ?? null;
+    post({ type: 'cameras', corrections: result.camera_corrections ?? null, error: result.camera_correction_error ?? null });
     if (typeof session.suggestViews === 'function') msg.suggestions = session.suggestViews(3);
   } catch (e) {
     msg.error = e?.message ?? String(e);

@@ -246,3 +246,89 @@ pub fn next_view_case(
         add_random,
     }))
 }
+
+/// The errors of one fit of the camera-correction check.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraCase {
+    /// Rotation error, degrees.
+    pub rotation_deg: f64,
+    /// Scale error: the largest per-axis |ŝ/s − 1|.
+    pub scale: f64,
+    /// ADD relative to the diameter.
+    pub add_rel: f64,
+}
+
+/// The camera-correction check on the scene of `seed` (3 + seed mod 2 views, masks
+/// rendered with the true cameras): the fit is given cameras each rotated by
+/// `rotation_deg` about a random axis and moved by `distance` of its distance to the
+/// object in a random direction (0 and 0: the true cameras), with or without
+/// `refine_cameras` (the default prior). `None` when the fit fails.
+///
+/// Errors: the scene cannot be made or the fit errs.
+pub fn camera_case(
+    mesh: &Mesh,
+    seed: u64,
+    scenes: &CoverageScenes,
+    rotation_deg: f64,
+    distance: f64,
+    refine: bool,
+) -> Result<Option<CameraCase>> {
+    use rand::{Rng, SeedableRng};
+    let settings = SynthSettings {
+        views: 3 + (seed % 2) as usize,
+        width: scenes.width,
+        height: scenes.height,
+        seed,
+        ..Default::default()
+    };
+    let scene = synthesize(mesh, &settings, None)?;
+    let centre = mesh
+        .bounds()
+        .map_or(scene.pose.translation, |b| scene.pose.apply(b.centre()));
+    let mut rng = rand::rngs::SmallRng::seed_from_u64(seed ^ 0x0ca3_e7a5);
+    let unit = |rng: &mut rand::rngs::SmallRng| loop {
+        let v = glam::DVec3::new(
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+        );
+        if (0.1..=1.0).contains(&v.length()) {
+            return v.normalize();
+        }
+    };
+    let views: Vec<View> = scene
+        .views()
+        .into_iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let cam = *v.camera();
+            let r = crate::so3::exp(unit(&mut rng) * rotation_deg.to_radians());
+            let shift = unit(&mut rng) * distance * cam.centre().distance(centre);
+            let mask = roughen(v.mask(), scenes.noise_px, scenes.correlation_px, seed * 64 + i as u64);
+            let off = crate::camera::Camera {
+                rotation: r * cam.rotation,
+                translation: r * cam.translation + shift,
+                ..cam
+            };
+            View::new(v.name(), off, mask, None, None, &Default::default())
+        })
+        .collect::<Result<_>>()?;
+    let mut fit = FitSettings::default();
+    if refine {
+        fit.refine_cameras = Some(crate::estimator::CameraPrior::default());
+    }
+    let mut est = Estimator::new(mesh.clone(), views, None, fit)?;
+    est.run(1_000_000)?;
+    if est.judgement().map(|j| j.verdict) == Some(Verdict::Failed) {
+        return Ok(None);
+    }
+    if let Some(Err(e)) = est.camera_corrections() {
+        return Err(Error::Settings(format!("scene {seed}: cameras not corrected: {e}")));
+    }
+    let e = metrics::pose_errors(mesh, &est.pose(), &scene.pose);
+    Ok(Some(CameraCase {
+        rotation_deg: e.rotation_deg,
+        scale: e.scale,
+        add_rel: e.add_rel,
+    }))
+}

@@ -303,6 +303,8 @@ mod tests {
                 covariance: None,
                 std_dev: None,
                 uncertainty_error: None,
+                camera_corrections: None,
+                camera_correction_error: None,
                 seconds: 1.0,
                 errors: Some(errors),
                 symmetric: Some(false),

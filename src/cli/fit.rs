@@ -65,6 +65,18 @@ pub struct FitOptions {
     /// The soft rasteriser (default edge).
     #[arg(long, value_enum)]
     pub raster: Option<RasterArg>,
+    /// Also estimate a small rotation and translation correction of every view's
+    /// camera, jointly with the pose, under a prior (--camera-prior-deg,
+    /// --camera-prior-distance); the result lists each view's correction.
+    #[arg(long)]
+    pub refine_cameras: bool,
+    /// The prior's standard deviation of a camera's rotation, degrees (default 1).
+    #[arg(long, requires = "refine_cameras")]
+    pub camera_prior_deg: Option<f64>,
+    /// The prior's standard deviation of a camera's position, as a fraction of its
+    /// distance to the object (default 0.01).
+    #[arg(long, requires = "refine_cameras")]
+    pub camera_prior_distance: Option<f64>,
 }
 
 /// `--raster`.
@@ -135,6 +147,17 @@ impl FitOptions {
                 WindowArg::Object => s.window_object_default(),
                 WindowArg::Full => localisebot::loss::target::WindowMode::Full,
             };
+        }
+        if self.refine_cameras {
+            let mut prior = localisebot::CameraPrior::default();
+            if let Some(d) = self.camera_prior_deg {
+                prior.rotation_deg = d;
+            }
+            if let Some(d) = self.camera_prior_distance {
+                prior.distance = d;
+            }
+            prior.validate().map_err(|e| e.to_string())?;
+            s.refine_cameras = Some(prior);
         }
         if self.no_robust {
             s.robust = false;
@@ -286,6 +309,15 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
         }
         (None, Some(e)) => eprintln!("  uncertainty: not measured: {e}"),
         (None, None) => {}
+    }
+    if let Some(e) = &result.camera_correction_error {
+        eprintln!("  cameras: not corrected: {e}");
+    }
+    for c in result.camera_corrections.iter().flatten() {
+        eprintln!(
+            "  camera of {}: corrected by {:.3}° and {:.2}% of its distance",
+            c.view, c.angle_deg, c.shift_pct
+        );
     }
     Ok(if a.strict && verdict != Verdict::Ok { NOT_OK } else { 0 })
 }

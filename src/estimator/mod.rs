@@ -24,16 +24,18 @@ use crate::pose::Pose;
 use crate::raster::hard::{self, BitMask};
 use crate::raster::silhouette::RenderMesh;
 use crate::uncertainty::{
-    fit_uncertainty, next_view, rank_views, sphere_candidates, NoiseModel, RankedView, Uncertainty,
+    fit_uncertainty, next_view, rank_views, sphere_candidates, std_dev, NoiseModel, RankedView, Uncertainty,
 };
 use crate::verdict::{self, Judgement, Verdict};
 use crate::view::View;
 use glam::{DMat3, DVec3};
 
+mod cameras;
 mod robust;
 mod settings;
 mod shard;
 
+pub use cameras::{CameraCorrection, CameraPrior};
 pub use robust::robust_weights;
 pub use settings::{FitSettings, Phase, Progress, ScaleMode, Termination, OBJECT_MARGIN};
 pub use shard::{Request, Response, Shard};
@@ -108,6 +110,8 @@ struct Final {
     judgement: Judgement,
     /// The pose's uncertainty, or why it could not be measured.
     uncertainty: std::result::Result<Uncertainty, String>,
+    /// The camera corrections when asked for, or why they could not be estimated.
+    corrections: Option<std::result::Result<Vec<CameraCorrection>, String>>,
 }
 
 /// Search candidates scored per step.
@@ -143,6 +147,8 @@ pub struct Estimator {
     last_loss: f64,
     termination: Option<Termination>,
     done: Option<Final>,
+    /// The views as given, once `views` holds the corrected cameras.
+    input_views: Option<Vec<View>>,
 }
 
 impl Estimator {
@@ -185,6 +191,7 @@ impl Estimator {
             last_loss: f64::NAN,
             termination: None,
             done: None,
+            input_views: None,
             settings,
         };
         match initial_pose {
@@ -216,9 +223,15 @@ impl Estimator {
         &self.model.mesh
     }
 
-    /// The views being fitted.
+    /// The views being fitted (once done with `refine_cameras`, with the corrected
+    /// cameras).
     pub fn views(&self) -> &[View] {
         &self.views
+    }
+
+    /// The views as given (before any camera correction).
+    pub fn input_views(&self) -> &[View] {
+        self.input_views.as_deref().unwrap_or(&self.views)
     }
 
     /// Each view's window.
@@ -595,10 +608,49 @@ impl Estimator {
         Ok(())
     }
 
-    /// Ends the fit: final figures at full resolution, the verdict, the termination.
+    /// Ends the fit: the camera corrections when asked for, final figures at full
+    /// resolution, the verdict, the uncertainty, the termination.
     fn finish(&mut self) {
+        let mut pose = self.tracks[0].best_pose;
+        let weights = self.tracks[0].weights.clone();
+        let free = free_parameters(self.settings.scale_mode);
+        let noise = NoiseModel::default();
+        let mut corrections = None;
+        let mut extra = None;
+        if let Some(prior) = self.settings.refine_cameras {
+            let last = self
+                .settings
+                .stages
+                .last()
+                .cloned()
+                .expect("validated: at least one stage");
+            let refined = fit_uncertainty(&self.model, &self.views, &self.windows, &pose, &weights, free, &noise)
+                .and_then(|u| {
+                    cameras::refine(
+                        &self.model,
+                        &self.views,
+                        &self.windows,
+                        &weights,
+                        pose,
+                        free,
+                        last.resolution,
+                        self.settings.objective(&last),
+                        &prior,
+                        &u.covariance,
+                    )
+                });
+            match refined {
+                Ok(r) => {
+                    pose = r.pose;
+                    self.input_views = Some(std::mem::replace(&mut self.views, r.views));
+                    self.tracks[0].best_pose = pose;
+                    corrections = Some(Ok(r.corrections));
+                    extra = Some(r.extra_covariance);
+                }
+                Err(e) => corrections = Some(Err(e.to_string())),
+            }
+        }
         let t = &self.tracks[0];
-        let pose = t.best_pose;
         let views: Vec<ViewFigures> = self
             .views
             .iter()
@@ -621,24 +673,48 @@ impl Estimator {
         } else {
             Termination::MaxIterations
         });
-        let uncertainty = fit_uncertainty(
-            &self.model,
-            &self.views,
-            &self.windows,
-            &pose,
-            &t.weights,
-            free_parameters(self.settings.scale_mode),
-            &NoiseModel::default(),
-        )
-        .map_err(|e| e.to_string());
+        let uncertainty = fit_uncertainty(&self.model, &self.views, &self.windows, &pose, &weights, free, &noise)
+            .map(|mut u| {
+                if let Some(x) = extra {
+                    u.covariance += x;
+                    u.std_dev = std_dev(&self.model.mesh, &pose, &u.covariance, u.std_dev.boundary_rms_px);
+                }
+                u
+            })
+            .map_err(|e| e.to_string());
         self.done = Some(Final {
             pose,
             views,
             judgement,
             uncertainty,
+            corrections,
         });
         self.objective = None;
         self.phase = Phase::Done;
+    }
+
+    /// Asks for (or stops asking for) the camera correction, with its prior, before the
+    /// fit ends (`FitSettings::refine_cameras`).
+    ///
+    /// Errors: the fit is already done, or the prior is out of range.
+    pub fn set_refine_cameras(&mut self, prior: Option<CameraPrior>) -> Result<()> {
+        if self.done.is_some() {
+            return Err(Error::Settings("camera correction: the fit is already done".into()));
+        }
+        if let Some(p) = &prior {
+            p.validate()?;
+        }
+        self.settings.refine_cameras = prior;
+        Ok(())
+    }
+
+    /// The views' camera corrections once done with `refine_cameras` (`Err` says why
+    /// they could not be estimated); `None` otherwise.
+    pub fn camera_corrections(&self) -> Option<std::result::Result<&[CameraCorrection], &str>> {
+        self.done
+            .as_ref()
+            .and_then(|f| f.corrections.as_ref())
+            .map(|c| c.as_ref().map(|v| v.as_slice()).map_err(|e| e.as_str()))
     }
 
     /// The pose the fit currently holds (the best so far once done).

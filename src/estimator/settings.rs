@@ -2,6 +2,7 @@
 //! every front end) and what it reports as it goes ([`Phase`], [`Progress`],
 //! [`Termination`]).
 
+use super::cameras::CameraPrior;
 use crate::error::{Error, Result};
 use crate::loss::objective::ObjectiveSettings;
 use crate::loss::target::WindowMode;
@@ -60,6 +61,9 @@ pub struct FitSettings {
     /// Down-weight, from the second stage on, a view whose loss contradicts the
     /// others' ([`robust_weights`]; default on).
     pub robust: bool,
+    /// Estimate a correction of every view's camera jointly with the pose, under this
+    /// prior, after the stages (`fit --refine-cameras`; default off).
+    pub refine_cameras: Option<CameraPrior>,
 }
 
 impl Default for FitSettings {
@@ -77,6 +81,7 @@ impl Default for FitSettings {
             verdict: VerdictThresholds::default(),
             robust: true,
             raster: RasterKind::Edge,
+            refine_cameras: None,
         }
     }
 }
@@ -107,6 +112,9 @@ impl FitSettings {
             if !(margin.is_finite() && margin >= 0.0) {
                 return bad(format!("window margin must be ≥ 0, got {margin}"));
             }
+        }
+        if let Some(p) = &self.refine_cameras {
+            p.validate()?;
         }
         self.objective(&self.stages[0]).validate()
     }

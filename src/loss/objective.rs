@@ -344,6 +344,15 @@ impl Objective {
         Ok(self.combine(parts))
     }
 
+    /// Moves view `i`'s camera to other extrinsics (a camera correction): its window,
+    /// canvas and intrinsics stay.
+    pub fn set_extrinsics(&mut self, i: usize, rotation: glam::DMat3, translation: glam::DVec3) {
+        if let Some(t) = self.targets.get_mut(i) {
+            t.camera.rotation = rotation;
+            t.camera.translation = translation;
+        }
+    }
+
     /// The objective at `pose`, without gradient.
     pub fn value(&mut self, mesh: &RenderMesh, pose: &Pose) -> Result<Evaluation> {
         let parts = self.parts(mesh, pose, PartKind::Value)?;

@@ -88,6 +88,11 @@ impl Session {
         &self.est
     }
 
+    /// The estimator, to change what it may change before the fit ends.
+    pub fn estimator_mut(&mut self) -> &mut Estimator {
+        &mut self.est
+    }
+
     /// One step, recording the loss when an optimiser iteration was done.
     fn step_once(&mut self) -> Result<Progress> {
         let p = self.est.step()?;
@@ -314,7 +319,7 @@ impl Session {
     pub fn reset(&mut self) -> Result<(), JsError> {
         let est = Estimator::new(
             self.est.mesh().clone(),
-            self.est.views().to_vec(),
+            self.est.input_views().to_vec(),
             self.initial_pose,
             self.est.settings().clone(),
         )?;

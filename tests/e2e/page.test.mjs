@@ -452,6 +452,33 @@ test('verdict: an impossible scene (ring masks) ends with verdict failed, shown 
   await page.context().close();
 });
 
+test('refine cameras: the switch makes the fit correct every view\'s camera; the corrections are shown and in the result', async () => {
+  const page = await openPage();
+  await byId(page, 'refine-cameras').check();
+  await byId(page, 'load-example').click();
+  await waitLoaded(page);
+  const t = await fitToConvergence(page);
+  assert.match(t.status, /^done — verdict ok/, t.status);
+  const shown = byId(page, 'camera-corrections');
+  await page.waitForFunction(() => !document.querySelector('[data-testid=camera-corrections]').hidden, null, { timeout: 10_000 });
+  const text = await shown.textContent();
+  assert.match(text, /^Camera corrections — /, text);
+  assert.equal(text.split(' · ').length, 4, text);
+  const [download] = await Promise.all([page.waitForEvent('download'), byId(page, 'download').click()]);
+  const result = JSON.parse(readFileSync(await download.path(), 'utf8'));
+  assert.equal(result.camera_corrections.length, 4);
+  for (const c of result.camera_corrections) {
+    // The toy's cameras are exact: the corrections stay well inside the 1° / 1 % prior.
+    assert.ok(c.angle_deg < 1 && c.shift_pct < 1, JSON.stringify(c));
+    assert.equal(c.world_to_camera.length, 4);
+  }
+  assert.equal(result.covariance.length, 9);
+  assert.ok(result.std_dev.add_95 > 0);
+  assert.deepEqual(page.problems, []);
+  console.log(`  ${text}`);
+  await page.context().close();
+});
+
 test('errors: an error thrown inside a fitting slice is shown, and Start works again', async () => {
   const page = await openPage();
   // The real glue, with Session.stepFor wrapped to throw on its 4th call (once): the

@@ -1,6 +1,7 @@
 //! Native integration tests: one binary, one module per area (as tiny-skia does).
 #![cfg(not(target_arch = "wasm32"))]
 
+mod cameras;
 mod cli;
 mod edge_raster;
 mod estimator;
