@@ -21,6 +21,10 @@ fi
 if [ -f tests/e2e/package.json ] && [ ! -d tests/e2e/node_modules/playwright-core ]; then
   (cd tests/e2e && npm ci --no-audit --no-fund --loglevel=error)
 fi
+# wasm-opt (binaryen 132, pinned by tools/package-lock.json) for scripts/build-wasm.sh.
+if ! tools/node_modules/.bin/wasm-opt --version 2>/dev/null | grep -q "version 132"; then
+  npm ci --prefix tools --no-audit --no-fund --loglevel=error
+fi
 # wasm-pack runs the wasm tests as users of the crate would (about 2.5 min to build).
 if ! command -v wasm-pack >/dev/null; then
   cargo install wasm-pack --locked

@@ -14,15 +14,20 @@
 //! - `files`: [`FileSet`] (a wrapper of `io::fileset::FileSet`), `checkMesh`,
 //!   `sceneFiles` and `meshFiles` (what a scene or a glTF names);
 //! - `builder`: [`SessionBuilder`], a session from parts;
-//! - `session`: [`Session`], the fit as JavaScript drives it.
+//! - `session`: [`Session`], the fit as JavaScript drives it (here, or with a pool:
+//!   `request`, `splitRequest`, `respond`);
+//! - `shard`: [`WorkerShard`] (`Shard` in JavaScript), a pool Worker's share of a
+//!   session's work, built once from the session's files.
 
 mod builder;
 mod files;
 mod session;
+mod shard;
 
 pub use builder::SessionBuilder;
 pub use files::{check_mesh, mesh_files, scene_files, FileRole, FileSet, Plan};
 pub use session::Session;
+pub use shard::WorkerShard;
 
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
