@@ -4,8 +4,8 @@
 # and the Duck when ../shared sits beside the repository) and copies three.js into
 # www/vendor/ for the 3D view (scripts/build-vendor.sh), then serves www/ on
 # http://127.0.0.1:8080/ (PORT=... to change), where "Load example" is one click away.
-# Installs the wasm target and the matching wasm-bindgen CLI first if missing (a few
-# minutes, once). Ctrl-C stops the server.
+# Installs the wasm target, the matching wasm-bindgen CLI and wasm-opt (npm binaryen,
+# tools/package.json) first if missing (a few minutes, once). Ctrl-C stops the server.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
@@ -15,6 +15,9 @@ if ! rustup target list --installed | grep -qx wasm32-unknown-unknown; then
 fi
 if ! wasm-bindgen --version 2>/dev/null | grep -qx "wasm-bindgen ${WB:-0.2.130}"; then
   cargo install wasm-bindgen-cli --version "${WB:-0.2.130}"
+fi
+if ! tools/node_modules/.bin/wasm-opt --version 2>/dev/null | grep -q "version 132"; then
+  npm ci --prefix tools --no-audit --no-fund --loglevel=error
 fi
 bash scripts/build-wasm.sh
 bash scripts/build-examples.sh

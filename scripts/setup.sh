@@ -25,6 +25,10 @@ fi
 if [ -f vendor/package.json ] && [ ! -d vendor/node_modules/three ]; then
   npm ci --prefix vendor --no-audit --no-fund --loglevel=error
 fi
+# wasm-opt (binaryen 132, pinned by tools/package-lock.json) for scripts/build-wasm.sh.
+if ! tools/node_modules/.bin/wasm-opt --version 2>/dev/null | grep -q "version 132"; then
+  npm ci --prefix tools --no-audit --no-fund --loglevel=error
+fi
 # wasm-pack runs the wasm tests as users of the crate would (about 2.5 min to build).
 if ! command -v wasm-pack >/dev/null; then
   cargo install wasm-pack --locked

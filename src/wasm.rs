@@ -14,7 +14,10 @@
 //! - `files`: [`FileSet`] (a wrapper of `io::fileset::FileSet`), `checkMesh`,
 //!   `sceneFiles` and `meshFiles` (what a scene or a glTF names);
 //! - `builder`: [`SessionBuilder`], a session from parts;
-//! - `session`: [`Session`], the fit as JavaScript drives it;
+//! - `session`: [`Session`], the fit as JavaScript drives it (here, or with a pool:
+//!   `request`, `splitRequest`, `respond`);
+//! - `shard`: [`WorkerShard`] (`Shard` in JavaScript), a pool Worker's share of a
+//!   session's work, built once from the session's files;
 //! - `scene_view`: what the page's 3D view draws, a second `impl Session` block
 //!   (`geometry`, `cameras`, `viewPicture`);
 //! - `next_view`: `Session.suggestViews`, the cameras for the next photograph;
@@ -26,11 +29,13 @@ mod files;
 mod next_view;
 mod scene_view;
 mod session;
+mod shard;
 
 pub use builder::SessionBuilder;
 pub use files::{check_mesh, mesh_files, scene_files, FileRole, FileSet, Plan};
 pub use scene_view::{display_mesh, MAX_DISPLAY_TRIANGLES};
 pub use session::Session;
+pub use shard::WorkerShard;
 
 use serde::Serialize;
 use wasm_bindgen::prelude::*;

@@ -6,8 +6,11 @@ const ui = {
   drop: $('drop'), input: $('file-input'), example: $('load-example'), choice: $('example-choice'),
   start: $('start'), pause: $('pause'), step: $('step'), reset: $('reset'), download: $('download'),
   status: $('status'), rate: $('rate'), error: $('error'), notice: $('notice'), views: $('views'), loss: $('loss'),
-  verdict: $('verdict'), fullFrame: $('full-frame'),
+  verdict: $('verdict'), fullFrame: $('full-frame'), workers: $('workers'),
 };
+// `?pool=N`: a pool of N Workers computing the fit (0 or 1: the fit in one Worker);
+// without it the coordinator sizes the pool by the cores (worker.js).
+const poolParam = new URLSearchParams(location.search).get('pool');
 
 let worker = null;
 let views = []; // [{ name, width, height, canvas, iou }]
@@ -18,7 +21,9 @@ let paintCount = 0;
 
 // ---- worker -------------------------------------------------------------------
 function startWorker() {
-  worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+  const url = new URL('./worker.js', import.meta.url);
+  if (poolParam !== null) url.searchParams.set('pool', poolParam);
+  worker = new Worker(url, { type: 'module' });
   worker.onmessage = ({ data }) => handlers[data.type]?.(data);
   worker.onerror = (e) => {
     e.preventDefault();
@@ -34,6 +39,7 @@ const handlers = {
     ui.notice.textContent = msg.warnings.join('\n');
     ui.notice.hidden = msg.warnings.length === 0;
     buildViews(msg.views);
+    showWorkers(msg.pool);
     state = 'ready';
     updateButtons();
   },
@@ -42,6 +48,7 @@ const handlers = {
   frame(msg) {
     if (state === 'running' && !msg.running) state = msg.progress.done ? 'done' : 'paused';
     if (msg.progress.done) state = 'done';
+    showWorkers(msg.pool);
     if (!latest) requestAnimationFrame(paint);
     latest = msg;
     updateButtons();
@@ -182,6 +189,12 @@ function updateButtons() {
   ui.step.disabled = !(state === 'ready' || state === 'paused');
   ui.reset.disabled = !loaded;
   ui.download.disabled = !loaded;
+}
+
+// How many Workers compute the fit: a pool of n (the coordinator besides), or one.
+function showWorkers(n) {
+  ui.workers.dataset.pool = n;
+  ui.workers.textContent = n ? `pool of ${n} workers` : '1 worker';
 }
 
 function showError(message) {

@@ -2,22 +2,59 @@
 // waits for it. Which dropped file is the scene, the mesh, a mask or an image is
 // decided in Rust (Session.fromFiles); this file only moves bytes and messages.
 // Messages in: load {files}, example {path}, start, pause, step, reset, result,
-// view {full}, cameras {on}. Messages out: loaded {views, warnings},
-// frame {progress, losses, overlays, size, running},
-// result {json}, error {message, fatal}, view3d {scene | covariance, suggestions}
-// (the 3D view's, at the end of this file). Every error — a load, a command, or a slice
+// view {full}, cameras {on}. Messages out: loaded {views, warnings, pool},
+// frame {progress, losses, overlays, size, running, pool},
+// result {json}, error {message, fatal}, view3d {scene | covariance, suggestions},
+// cameras {corrections, error} (the 3D view's and the corrections, at the end of this
+// file). Every error — a load, a command, or a slice
 // of the fitting loop — is caught and posted as an error, and the loop stops.
+//
+// With more than one core this worker is the coordinator of a pool of module Workers
+// (pool-worker.js), each holding a wasm Shard built once from the loaded files (and the
+// wasm module compiled here): every step is request → split → post to the pool → gather
+// → respond, and a frame is sent every BUDGET_MS. Pool size: min(N, views, MAX_POOL),
+// N from `?pool=N` in this worker's URL (main.js passes on the page's) or else
+// hardwareConcurrency; no pool below 2 (`?pool=0` or `?pool=1`: none). Without a pool (one core, a pool that failed to start, or after a pool
+// error until the next load) the Session steps here, with stepFor.
 import init, { FileSet, Session, sceneFiles, meshFiles } from './pkg/localisebot.js';
 
 const BUDGET_MS = 30; // work per frame: about 30 frames a second while fitting
 const WINDOW_PX = 256; // side of an object-window overlay
-const ready = init();
+const MAX_POOL = 8; // more workers than this buy little: an iteration has few views
+const POOL_START_MS = 30_000; // a pool not ready by then is given up (the fit runs here)
+// The wasm module, compiled once here and posted to the pool's Workers, which
+// instantiate it without compiling it again (and share its optimised code).
+const wasmModule = (async () => {
+  const url = new URL('./pkg/localisebot_bg.wasm', import.meta.url);
+  try {
+    return await WebAssembly.compileStreaming(fetch(url));
+  } catch {
+    const res = await fetch(url); // e.g. served without the application/wasm type
+    if (!res.ok) throw new Error(`pkg/localisebot_bg.wasm: HTTP ${res.status}`);
+    return WebAssembly.compile(await res.arrayBuffer());
+  }
+})();
+const ready = wasmModule.then((module) => init({ module_or_path: module }));
 let session = null;
+let files = null; // the loaded files, for the pool's shards
+let pool = null;
 let running = false;
+let runs = 0; // the current run loop's number (one loop at a time)
 let fullFrame = false; // overlays of the whole image instead of each view's object window
 let refineCameras = false; // correct each view's camera jointly with the pose
 
+const poolParam = new URL(self.location.href).searchParams.get('pool');
+
 const post = (msg, transfer = []) => postMessage(msg, transfer);
+
+// Commands that step or replace the session run one at a time, and never during a
+// pool round: `exclusive(fn)` runs fn after whatever is running.
+let lock = Promise.resolve();
+function exclusive(fn) {
+  const p = lock.then(fn);
+  lock = p.catch(() => {});
+  return p;
+}
 
 // Stops the loop and tells the page. A WebAssembly.RuntimeError is a bug (a trap):
 // the page then starts a fresh worker rather than trust this instance.
@@ -36,24 +73,166 @@ function frame(progress = session.progress()) {
     overlays.push((fullFrame ? session.overlay(i) : session.overlayWindow(i, WINDOW_PX)).buffer);
   }
   const size = fullFrame ? null : WINDOW_PX;
-  post({ type: 'frame', progress, losses, overlays, size, running }, [losses.buffer, ...overlays]);
+  post({ type: 'frame', progress, losses, overlays, size, running, pool: pool?.size ?? 0 },
+    [losses.buffer, ...overlays]);
   done3d(progress);
 }
 
-// files: [{ path, bytes }], as dropped or fetched.
-function load(files) {
+// ---- the pool ------------------------------------------------------------------
+// The number of pool workers for a session of `views` views (0: none).
+function poolSize(views) {
+  const cores = navigator.hardwareConcurrency || 1;
+  const wanted = poolParam === null ? cores : Number.parseInt(poolParam, 10) || 0;
+  const n = Math.min(wanted, views, MAX_POOL);
+  return n >= 2 ? n : 0;
+}
+
+// n Workers, each with a Shard of the session owning views i, i + n, … (round robin);
+// resolves once all are ready, rejects on the first failure (all then terminated).
+class Pool {
+  constructor(n) {
+    this.size = n;
+    this.workers = [];
+    this.pending = new Map(); // id → { ok, fail }
+    this.nextId = 0;
+    this.broken = null;
+  }
+
+  static async start(n, files, viewCount) {
+    const pool = new Pool(n);
+    const module = await wasmModule;
+    try {
+      await new Promise((ok, fail) => {
+        let waiting = n;
+        const timer = setTimeout(() => fail(new Error(`the pool did not start within ${POOL_START_MS / 1000} s`)),
+          POOL_START_MS);
+        for (let i = 0; i < n; i++) {
+          const w = new Worker(new URL('./pool-worker.js', import.meta.url), { type: 'module' });
+          pool.workers.push(w);
+          const views = [];
+          for (let v = i; v < viewCount; v += n) views.push(v);
+          w.onmessage = ({ data }) => {
+            if (data.type === 'ready' && data.views === viewCount) {
+              if (--waiting === 0) {
+                clearTimeout(timer);
+                ok();
+              }
+            } else {
+              clearTimeout(timer);
+              fail(new Error(data.message ?? `pool worker ${i}: ${data.views} views, not ${viewCount}`));
+            }
+          };
+          w.onerror = (e) => {
+            e.preventDefault();
+            clearTimeout(timer);
+            fail(new Error(`pool worker ${i} failed to start: ${e.message || 'no message'}`));
+          };
+          // The compiled module and the files, once per worker (the files copied: each
+          // worker keeps its own).
+          w.postMessage({ type: 'init', module, files, views });
+        }
+      });
+    } catch (e) {
+      pool.terminate();
+      throw e;
+    }
+    pool.workers.forEach((w, i) => {
+      w.onmessage = ({ data }) => pool.answer(data, i);
+      w.onerror = (e) => {
+        e.preventDefault();
+        pool.breaks(new Error(`pool worker ${i} failed: ${e.message || 'no message'}`));
+      };
+      w.onmessageerror = () => pool.breaks(new Error(`pool worker ${i}: a message could not be read`));
+    });
+    return pool;
+  }
+
+  answer(data, i) {
+    const p = this.pending.get(data.id);
+    if (!p) return;
+    this.pending.delete(data.id);
+    if (data.type === 'done') p.ok(data.response);
+    else p.fail(new Error(`pool worker ${i}: ${data.message}`));
+  }
+
+  // A worker died: every request in flight fails, and so does every later one.
+  breaks(e) {
+    this.broken ??= e;
+    for (const p of this.pending.values()) p.fail(e);
+    this.pending.clear();
+  }
+
+  // Each worker's share of one step: parts[i] to worker i (fewer parts than workers:
+  // the first ones); resolves to the responses in that order.
+  work(parts) {
+    if (this.broken) return Promise.reject(this.broken);
+    return Promise.all(parts.map((request, i) => new Promise((ok, fail) => {
+      const id = this.nextId++;
+      this.pending.set(id, { ok, fail });
+      this.workers[i].postMessage({ type: 'work', id, request });
+    })));
+  }
+
+  terminate() {
+    for (const w of this.workers) w.terminate();
+    this.breaks(new Error('the pool was stopped'));
+  }
+}
+
+function stopPool() {
+  pool?.terminate();
+  pool = null;
+}
+
+// A pool for the loaded session, if it wants one; on failure the fit runs here and the
+// reason is returned as a notice.
+async function startPool() {
+  stopPool();
+  const n = poolSize(session.viewCount);
+  if (n === 0) return [];
+  try {
+    pool = await Pool.start(n, files, session.viewCount);
+    return [];
+  } catch (e) {
+    return [`no worker pool (${e?.message ?? e}): the fit runs in one worker`];
+  }
+}
+
+// One step through the pool: the same step as session.step(1), bit for bit; resolves
+// to whether the fit is done (respond reports no Progress: the frame asks for it once).
+// After an error the pool is not trusted: it is stopped, and the fit goes on here
+// from the step that failed (the session never took its responses) until the next load.
+async function poolStep() {
+  try {
+    const request = session.request();
+    if (request === undefined) return true;
+    const responses = await pool.work(session.splitRequest(request, pool.size));
+    return session.respond(responses);
+  } catch (e) {
+    stopPool();
+    if (e instanceof WebAssembly.RuntimeError) throw e; // a trap here: fatal, as without a pool
+    throw new Error(`${e?.message ?? e} (the worker pool was stopped: the fit goes on in one worker)`);
+  }
+}
+
+// ---- loading -------------------------------------------------------------------
+// list: [{ path, bytes }], as dropped or fetched.
+async function load(list) {
   running = false;
   const set = new FileSet();
   try {
-    for (const f of files) set.add(f.path, f.bytes);
+    for (const f of list) set.add(f.path, f.bytes);
     const next = Session.fromFiles(set); // throws an Error naming what is missing
+    stopPool();
     session?.free();
     session = next;
     session.setRefineCameras(refineCameras);
+    files = list;
   } finally {
     set.free();
   }
-  post({ type: 'loaded', views: session.views(), warnings: session.warnings() });
+  const notes = await startPool();
+  post({ type: 'loaded', views: session.views(), warnings: [...session.warnings(), ...notes], pool: pool?.size ?? 0 });
   scene3d();
   frame();
 }
@@ -74,24 +253,45 @@ async function example(path) {
   return [scene, mesh, ...rest];
 }
 
-// Runs the fit in slices of BUDGET_MS, yielding between them so that pause and
-// step messages get in. A slice that throws ends the run with an error message.
-function run() {
-  if (!running || !session) return;
-  try {
-    const progress = session.stepFor(BUDGET_MS);
-    if (progress.done) running = false;
-    frame(progress);
-  } catch (e) {
-    fail(e);
-    return;
+// ---- fitting -------------------------------------------------------------------
+// One slice of about BUDGET_MS of fitting, then a frame.
+async function slice() {
+  if (!running || !session || session.done) return;
+  let progress;
+  if (pool) {
+    const t0 = performance.now();
+    let done;
+    do done = await poolStep();
+    while (running && !done && performance.now() - t0 < BUDGET_MS);
+    progress = session.progress();
+  } else {
+    progress = session.stepFor(BUDGET_MS);
   }
-  if (running) setTimeout(run, 0);
+  if (progress.done) running = false;
+  frame(progress);
+}
+
+// Runs the fit in slices, yielding between them so that pause and step messages get
+// in. A slice that throws ends the run with an error message.
+async function run() {
+  const me = ++runs;
+  while (running && me === runs && session && !session.done) {
+    try {
+      await exclusive(slice);
+    } catch (e) {
+      fail(e);
+      return;
+    }
+    await new Promise((ok) => setTimeout(ok, 0));
+  }
 }
 
 const handlers = {
-  load: (msg) => load(msg.files),
-  example: async (msg) => load(await example(msg.path)),
+  load: (msg) => exclusive(() => load(msg.files)),
+  example: async (msg) => {
+    const list = await example(msg.path);
+    await exclusive(() => load(list));
+  },
   start: () => {
     if (!session || session.done || running) return;
     running = true;
@@ -99,27 +299,37 @@ const handlers = {
   },
   pause: () => {
     running = false;
-    if (session) frame();
+    return exclusive(() => session && frame());
   },
   step: () => {
     running = false;
-    if (!session) return;
-    frame(session.step(1));
+    return exclusive(async () => {
+      if (!session) return;
+      if (pool && !session.done) {
+        await poolStep();
+        frame();
+      } else {
+        frame(session.step(1));
+      }
+    });
   },
   reset: () => {
     running = false;
-    if (!session) return;
-    session.reset();
-    frame();
+    // The pool's shards hold only the inputs: they serve the fit from the start again.
+    return exclusive(() => {
+      if (!session) return;
+      session.reset();
+      frame();
+    });
   },
   cameras: (msg) => {
     refineCameras = Boolean(msg.on);
-    if (session && !session.done) session.setRefineCameras(refineCameras);
+    return exclusive(() => session && !session.done && session.setRefineCameras(refineCameras));
   },
-  result: () => session && post({ type: 'result', json: session.resultJson() }),
+  result: () => exclusive(() => session && post({ type: 'result', json: session.resultJson() })),
   view: (msg) => {
     fullFrame = Boolean(msg.full);
-    if (session) frame();
+    return exclusive(() => session && frame());
   },
 };
 

@@ -359,7 +359,12 @@ impl Estimator {
                 let mut batches: Vec<(usize, Vec<Candidate>)> = Vec::new();
                 for r in responses {
                     match r {
-                        Response::Candidates { first, candidates } => batches.push((first, candidates)),
+                        Response::Candidates { first, candidates } => {
+                            for c in &candidates {
+                                c.pose.validate()?;
+                            }
+                            batches.push((first, candidates))
+                        }
                         Response::Parts { .. } => return bad("view parts for a search batch".into()),
                     }
                 }

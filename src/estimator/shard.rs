@@ -187,6 +187,7 @@ impl Shard {
     pub fn work(&mut self, request: &Request) -> Result<Response> {
         match request {
             Request::Search { start, first, count } => {
+                start.validate()?;
                 let end = first
                     .checked_add(*count)
                     .filter(|&e| e <= self.rotations.len())
@@ -232,6 +233,7 @@ impl Shard {
                     .stages
                     .get(*stage)
                     .ok_or_else(|| Error::Settings(format!("no stage {stage}")))?;
+                pose.validate()?;
                 if model_union.len() != self.views.len() {
                     return Err(Error::Settings(format!(
                         "{} unions for {} views",

@@ -2,10 +2,11 @@
 //! budget, timed with `Date.now()`), progress with the pose and full-resolution IoUs,
 //! per-view overlays for `ImageData`, the loss trace and the result (SPEC §3).
 
+use super::shard::{parse_request, MAX_SHARDS};
 use super::{to_js, FileSet};
 use crate::app::overlay;
 use crate::error::Result;
-use crate::estimator::{Estimator, FitSettings, Progress};
+use crate::estimator::{Estimator, FitSettings, Progress, Response};
 use crate::mask::Mask;
 use crate::mesh::Mesh;
 use crate::pose::Pose;
@@ -28,6 +29,9 @@ pub struct Session {
     losses: Vec<f64>,
     iteration: usize,
     rendered: Option<Vec<Mask>>,
+    /// When the pending [`Session::request`] was made (`Date.now()`, ms), for the time
+    /// a pool's step takes.
+    requested_at: Option<f64>,
     warnings: Vec<String>,
     grasps: Vec<crate::app::grasp::Grasp>,
 }
@@ -71,6 +75,7 @@ impl Session {
             losses: Vec::new(),
             iteration: 0,
             rendered: None,
+            requested_at: None,
             warnings: Vec::new(),
             grasps: Vec::new(),
         })
@@ -93,15 +98,22 @@ impl Session {
         &mut self.est
     }
 
-    /// One step, recording the loss when an optimiser iteration was done.
+    /// One step, with the bookkeeping of every step.
     fn step_once(&mut self) -> Result<Progress> {
         let p = self.est.step()?;
+        self.requested_at = None;
+        self.stepped(&p);
+        Ok(p)
+    }
+
+    /// The bookkeeping after a step, done here or by a pool of shards: the loss of an
+    /// optimiser iteration recorded, the rendered silhouettes invalidated.
+    fn stepped(&mut self, p: &Progress) {
         if p.iteration > self.iteration {
             self.iteration = p.iteration;
             self.losses.push(p.loss);
         }
         self.rendered = None;
-        Ok(p)
     }
 
     /// The full-resolution silhouettes at the current pose (rendered once per step).
@@ -223,6 +235,55 @@ impl Session {
         self.progress_out(&p)
     }
 
+    /// The work the next step needs, for a pool of Workers each holding a `Shard` (the
+    /// same step `step(1)` would do here): an opaque plain object to split with
+    /// `splitRequest` and hand to the shards; `undefined` once the fit is done. The time
+    /// until `respond` counts as stepping time.
+    pub fn request(&mut self) -> Result<JsValue, JsError> {
+        match self.est.request() {
+            Some(r) => {
+                self.requested_at = Some(js_sys::Date::now());
+                to_js(&r)
+            }
+            None => Ok(JsValue::UNDEFINED),
+        }
+    }
+
+    /// `request` split for `n` shards (1–64), in shard order: a search batch into up to
+    /// `n` contiguous slices (fewer when it is small: the first shards take them), an
+    /// evaluation `n` times (each shard computes the views it owns).
+    #[wasm_bindgen(js_name = splitRequest)]
+    pub fn split_request(&self, request: JsValue, n: u32) -> Result<Vec<JsValue>, JsError> {
+        if n == 0 || n > MAX_SHARDS {
+            return Err(JsError::new(&format!("splitRequest: {n} shards (1 to {MAX_SHARDS})")));
+        }
+        let request = parse_request(request)?;
+        request.split(n as usize).iter().map(to_js).collect()
+    }
+
+    /// Completes the step `request` asked for with the shards' responses (every view's
+    /// part of an evaluation, once; every rotation of a search batch), with the same
+    /// bookkeeping as `step` (loss trace, iteration count, time); returns whether the
+    /// fit is done. Unlike `step`, it reports no `Progress`: that renders every view at
+    /// full resolution (its IoUs), which a pool stepping many times per frame would pay at
+    /// every step; ask `progress()` when showing a frame. Throws an `Error` for
+    /// responses that do not answer the current request (the fit then stays where it was).
+    pub fn respond(&mut self, responses: Vec<JsValue>) -> Result<bool, JsError> {
+        let t0 = js_sys::Date::now();
+        let responses = responses
+            .into_iter()
+            .map(|r| {
+                serde_wasm_bindgen::from_value::<Response>(r)
+                    .map_err(|e| JsError::new(&format!("respond: not a response: {e}")))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let p = self.est.respond(responses)?;
+        let since = self.requested_at.take().unwrap_or(t0);
+        self.seconds += (js_sys::Date::now() - since) / 1000.0;
+        self.stepped(&p);
+        Ok(self.est.is_done())
+    }
+
     /// Where the fit stands, without stepping.
     #[wasm_bindgen(unchecked_return_type = "Progress")]
     pub fn progress(&mut self) -> Result<JsValue, JsError> {
@@ -328,6 +389,7 @@ impl Session {
         self.losses.clear();
         self.iteration = 0;
         self.rendered = None;
+        self.requested_at = None;
         Ok(())
     }
 }

@@ -108,14 +108,29 @@ const browser = await chromium.launch({
     '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'],
 });
 
-async function openPage() {
+// The page, with `query` (e.g. '?pool=3': a pool of 3 Workers; '?pool=0': one Worker).
+async function openPage(query = '') {
   const context = await browser.newContext({ viewport: { width: 1280, height: 900 }, acceptDownloads: true });
   const page = await context.newPage();
   page.problems = [];
   page.on('pageerror', (e) => page.problems.push(`page error: ${e.message}`));
   page.on('console', (m) => m.type() === 'error' && page.problems.push(`console error: ${m.text()}`));
-  await page.goto(server.url);
+  // Fetches of the wasm by the page and its Workers (a pool's Workers get the module compiled).
+  page.wasmFetches = 0;
+  context.on('request', (r) => r.url().endsWith('/localisebot_bg.wasm') && page.wasmFetches++);
+  await page.goto(server.url + query);
   return page;
+}
+
+// How many pool Workers the page says compute the fit (0: the coordinator alone).
+const workers = async (page) => Number(await byId(page, 'workers').getAttribute('data-pool'));
+
+// The result the page downloads, parsed.
+async function downloadResult(page, name) {
+  const [download] = await Promise.all([page.waitForEvent('download'), byId(page, 'download').click()]);
+  const saved = join(artifacts, name);
+  await download.saveAs(saved);
+  return JSON.parse(readFileSync(saved, 'utf8'));
 }
 
 const byId = (page, id) => page.getByTestId(id);
@@ -480,7 +495,7 @@ test('refine cameras: the switch makes the fit correct every view\'s camera; the
 });
 
 test('errors: an error thrown inside a fitting slice is shown, and Start works again', async () => {
-  const page = await openPage();
+  const page = await openPage('?pool=0'); // one Worker: the Session steps with stepFor
   // The real glue, with Session.stepFor wrapped to throw on its 4th call (once): the
   // worker's own catch path must report it.
   let served = 0;
@@ -516,6 +531,139 @@ Session.prototype.stepFor = function (...args) {
   assert.deepEqual(page.problems, []);
   console.log(`  after the error: ${t.status}`);
   await page.context().close();
+});
+
+// The toy example fitted in one Worker (stepFor), for the pool tests to compare with.
+let single = null;
+
+test('pool: 2 and 3 Workers give the single Worker\'s fit bit for bit (pose, iterations, loss trace), also after Reset; timings printed', async () => {
+  const fits = [];
+  for (const n of [0, 2, 3]) {
+    const page = await openPage(`?pool=${n}`);
+    await page.waitForFunction(() => document.querySelector('[data-testid=example-choice]').options.length > 0);
+    await byId(page, 'load-example').click();
+    await waitLoaded(page);
+    assert.equal(await workers(page), n, `?pool=${n}: the page reports its workers`);
+    assert.equal(await byId(page, 'workers').textContent(), n ? `pool of ${n} workers` : '1 worker');
+    const who = n === 0 ? 'one worker' : `pool of ${n} workers`;
+    // Twice: in fresh Workers (their wasm still being tiered up), then after Reset (which
+    // keeps the pool: the shards serve the fit from the start again).
+    for (const run of ['fresh', 'after Reset']) {
+      if (run !== 'fresh') {
+        await byId(page, 'reset').click();
+        await page.waitForFunction(() => document.querySelector('[data-testid=status]').textContent.startsWith('ready'));
+      }
+      const t = await fitToConvergence(page);
+      assert.match(t.status, /^done — verdict ok/, t.status);
+      assert.equal(await workers(page), n, 'the pool stayed up');
+      const result = await downloadResult(page, `result-pool${n}${run === 'fresh' ? '' : '-reset'}.json`);
+      fits.push({ n, label: `${who}, ${run}`, t, result });
+    }
+    assert.deepEqual(page.problems, []);
+    assert.equal(page.wasmFetches, 1, 'the wasm is fetched once: the pool Workers get the compiled module');
+    await page.context().close();
+  }
+  single = fits[0].result;
+  for (const { label, result } of fits.slice(1)) {
+    assert.deepEqual(result.pose, single.pose, `${label}: the same pose, bit for bit`);
+    assert.deepEqual(result.matrix, single.matrix, `${label}: the same matrix`);
+    assert.equal(result.iterations, single.iterations, `${label}: the same iterations`);
+    assert.deepEqual(result.loss_history, single.loss_history, `${label}: the same loss trace`);
+    assert.deepEqual(result.views, single.views, `${label}: the same per-view figures`);
+  }
+  for (const { label, t, result } of fits) {
+    console.log(`  benchmark: ${label.padEnd(32)}: converged in ${t.wall.toFixed(2)} s wall, ` +
+      `${result.seconds.toFixed(2)} s fitting, ${result.iterations} iterations, ${t.paintsPerSecond.toFixed(1)} repaints/s`);
+  }
+});
+
+// The real glue with Shard.prototype.work wrapped to throw (in every pool Worker, on its
+// calls number `at`).
+async function routeGlue(page, at) {
+  await page.context().route('**/pkg/localisebot.js', async (route) => {
+    const response = await route.fetch();
+    const body = (await response.text()) + `
+const __work = Shard.prototype.work;
+let __calls = 0;
+Shard.prototype.work = function (...args) {
+  if (++__calls === ${at}) throw new Error('injected failure in a shard');
+  return __work.apply(this, args);
+};
+`;
+    await route.fulfill({ response, body });
+  });
+}
+
+test('pool errors: a shard that throws mid-fit shows the error, stops the pool; Start finishes the same fit in one worker', async () => {
+  const page = await openPage('?pool=2');
+  await routeGlue(page, 40);
+  await page.reload();
+  await page.waitForFunction(() => document.querySelector('[data-testid=example-choice]').options.length > 0);
+  await byId(page, 'load-example').click();
+  await waitLoaded(page);
+  assert.equal(await workers(page), 2);
+  await byId(page, 'start').click();
+  const error = byId(page, 'error');
+  await error.waitFor({ state: 'visible', timeout: 60_000 });
+  const message = await error.textContent();
+  assert.match(message, /injected failure in a shard/);
+  assert.match(message, /the worker pool was stopped: the fit goes on in one worker/);
+  await page.waitForFunction(() => !document.querySelector('[data-testid=start]').disabled);
+  assert.ok(await byId(page, 'pause').isDisabled(), 'no longer running');
+  const t = await fitToConvergence(page);
+  assert.equal(await workers(page), 0, 'the fit went on without the pool');
+  assert.match(t.status, /^done — verdict ok/, t.status);
+  const result = await downloadResult(page, 'result-pool-error.json');
+  if (single) {
+    // The failed step was never taken: the fit is the one a single worker makes.
+    assert.deepEqual(result.pose, single.pose);
+    assert.equal(result.iterations, single.iterations);
+  }
+  assert.deepEqual(page.problems, []);
+  console.log(`  after the pool error: ${t.status}`);
+  await page.context().close();
+});
+
+// The real glue, made to fail in pool Workers only (self.location is the Worker's
+// script): `where` 'load' throws when pool-worker.js imports it (the Worker fails to
+// start: its error event), 'shard' when it builds its Shard (an error message back).
+// Playwright does not intercept a nested Worker's own script, so its import is the hook.
+async function breakPoolWorkers(page, where) {
+  await page.context().route('**/pkg/localisebot.js', async (route) => {
+    const response = await route.fetch();
+    const inPool = "/pool-worker\\.js$/.test(self.location.pathname)";
+    const body = where === 'load'
+      ? `if (${inPool}) throw new Error('no pool here');\n${await response.text()}`
+      : `${await response.text()}
+if (${inPool}) Shard.fromFiles = () => { throw new Error('no shard here'); };
+`;
+    await route.fulfill({ response, body });
+  });
+}
+
+test('pool errors: a pool that cannot start (a Worker fails to load, or its Shard to build) leaves the fit to one worker, with a notice', async () => {
+  for (const [where, why] of [['load', /pool worker \d failed to start: .*no pool here/], ['shard', /no shard here/]]) {
+    const page = await openPage('?pool=3');
+    await breakPoolWorkers(page, where);
+    await page.reload();
+    await page.waitForFunction(() => document.querySelector('[data-testid=example-choice]').options.length > 0);
+    await byId(page, 'load-example').click();
+    await waitLoaded(page);
+    assert.equal(await workers(page), 0, where);
+    assert.equal(await byId(page, 'workers').textContent(), '1 worker');
+    const notice = page.locator('#notice');
+    assert.ok(await notice.isVisible(), where);
+    const text = await notice.textContent();
+    assert.match(text, /no worker pool \(.*\): the fit runs in one worker/);
+    assert.match(text, why);
+    assert.ok(await byId(page, 'error').isHidden(), where);
+    await byId(page, 'step').click();
+    await page.waitForFunction(() => /search: [1-9]/.test(document.querySelector('[data-testid=status]').textContent));
+    const t = await fitToConvergence(page);
+    assert.match(t.status, /^done — verdict ok/, t.status);
+    console.log(`  ${where}: notice: ${text}`);
+    await page.context().close();
+  }
 });
 
 // ---- run ---------------------------------------------------------------------------------

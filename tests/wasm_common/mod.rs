@@ -21,7 +21,7 @@ use localisebot::io::{gltf_write, load_mesh, no_files, ply};
 use localisebot::mat3_from_rows;
 use localisebot::metrics::hard_iou;
 use localisebot::raster::hard;
-use localisebot::wasm::{check_mesh, mesh_files, scene_files, FileRole, FileSet, Session, SessionBuilder};
+use localisebot::wasm::{check_mesh, mesh_files, scene_files, FileRole, FileSet, Session, SessionBuilder, WorkerShard};
 use localisebot::{CameraJson, Mesh, PoseJson, SceneJson, ViewJson};
 use wasm_bindgen::{JsCast, JsError, JsValue};
 use wasm_bindgen_test::wasm_bindgen_test;
@@ -182,7 +182,7 @@ fn hard_renders_at_the_true_pose_reproduce_the_native_masks() {
     assert_eq!(scene.views.len(), 3);
     for v in &scene.views {
         let m = hard::render(&scene.mesh, &truth, v.camera());
-        let iou = hard_iou(&m, &v.mask());
+        let iou = hard_iou(&m, v.mask());
         // The masks were rendered natively by the same rasteriser (integer inside tests).
         assert!(
             iou >= 0.999,
@@ -469,4 +469,89 @@ fn a_fit_converges_to_the_native_result() {
         assert!((w - n).abs() <= 0.02 && w >= 0.95, "view IoU {w} in wasm, {n} natively");
     }
     assert!(wasm["errors"]["rotation_deg"].as_f64().unwrap() < 2.0);
+}
+
+/// The pool's protocol as the page's coordinator runs it (`www/worker.js`), in one
+/// thread: `request` → `splitRequest` → each shard's `work` (plain JavaScript objects)
+/// → `respond`, against the same scene stepped with `step`: the same fit, bit for bit,
+/// with the same loss trace.
+#[wasm_bindgen_test]
+fn shards_give_the_session_s_own_fit_bit_for_bit() {
+    let files = parity_scene();
+    let set = file_set(&files, false);
+    let mut local = Session::from_files(&set).unwrap();
+    while !local.done() {
+        local.step(50).unwrap();
+    }
+    let mut pooled = Session::from_files(&set).unwrap();
+    let mut shards = [
+        WorkerShard::from_files(&set, vec![0, 2]).unwrap(),
+        WorkerShard::from_files(&set, vec![1]).unwrap(),
+    ];
+    assert_eq!(shards[0].view_count(), 3);
+    assert_eq!(shards[1].views(), vec![1]);
+    let (mut rounds, mut last) = (0, false);
+    loop {
+        let request = pooled.request().unwrap();
+        if request.is_undefined() {
+            break;
+        }
+        let parts = pooled.split_request(request, 2).unwrap();
+        assert!(!parts.is_empty() && parts.len() <= 2);
+        let responses: Vec<JsValue> = parts
+            .into_iter()
+            .zip(shards.iter_mut())
+            .map(|(r, sh)| sh.work(r).unwrap())
+            .collect();
+        last = pooled.respond(responses).unwrap();
+        rounds += 1;
+        assert!(rounds < 100_000, "the fit does not end");
+    }
+    assert!(pooled.done() && last, "respond says when the fit is done");
+    assert_eq!(
+        js_get(&pooled.progress().unwrap(), "phase").as_string().unwrap(),
+        "done"
+    );
+    let result = |s: &Session| -> serde_json::Value { serde_json::from_str(&s.result_json().unwrap()).unwrap() };
+    let (a, b) = (result(&local), result(&pooled));
+    assert_eq!(a["pose"], b["pose"], "the same pose");
+    assert_eq!(a["iterations"], b["iterations"]);
+    assert_eq!(a["loss_history"], b["loss_history"]);
+    assert_eq!(local.losses(), pooled.losses(), "the same loss trace");
+    assert!(pooled.losses().len() > 10);
+    assert!(pooled.seconds() > 0.0);
+    assert!(rounds > 40, "{rounds} rounds");
+
+    // Bad input is an Error, never a panic.
+    let mut fresh = Session::from_files(&set).unwrap();
+    let request = fresh.request().unwrap();
+    assert_eq!(js_get(&request, "type").as_string().unwrap(), "search");
+    let msg = |e: JsError| js_message(e);
+    assert!(msg(fresh.split_request(request.clone(), 0).unwrap_err()).contains("0 shards"));
+    assert!(msg(fresh.split_request(JsValue::from_str("nonsense"), 2).unwrap_err()).contains("not a request"));
+    assert!(msg(shards[0].work(JsValue::from_f64(3.0)).unwrap_err()).contains("not a request"));
+    let bad: JsValue = js_sys::JSON::parse(
+        r#"{"type": "search", "start": {"rotation": [1,0,0,0,1,0,0,0,1], "translation": [0,0,0], "scale": [1,1,1]}, "first": 4000000000, "count": 16}"#,
+    )
+    .unwrap();
+    assert!(msg(shards[0].work(bad).unwrap_err()).contains("search rotations"));
+    let nan = js_sys::JSON::parse(
+        r#"{"type": "search", "start": {"rotation": [1,0,0,0,1,0,0,0,1], "translation": [0,0,0], "scale": [-1,1,1]}, "first": 0, "count": 16}"#,
+    )
+    .unwrap();
+    assert!(msg(shards[0].work(nan).unwrap_err()).contains("scale must be positive"));
+    // Responses that do not answer the request are refused; the session stays usable.
+    let part = shards[1]
+        .work(fresh.split_request(request.clone(), 3).unwrap()[1].clone())
+        .unwrap();
+    assert!(msg(fresh.respond(vec![part]).unwrap_err()).contains("respond"));
+    assert!(msg(fresh.respond(vec![JsValue::NULL]).unwrap_err()).contains("not a response"));
+    assert!(WorkerShard::from_files(&set, vec![3]).is_err());
+    assert!(WorkerShard::from_files(&set, vec![]).is_err());
+    assert!(WorkerShard::from_files(&set, vec![1, 1]).is_err());
+    let parts = fresh.split_request(request, 1).unwrap();
+    assert!(!fresh.respond(vec![shards[0].work(parts[0].clone()).unwrap()]).unwrap());
+    assert_eq!(js_get(&fresh.progress().unwrap(), "searched").as_f64().unwrap(), 16.0);
+    fresh.step(1).unwrap();
+    assert_eq!(js_get(&fresh.progress().unwrap(), "searched").as_f64().unwrap(), 32.0);
 }
