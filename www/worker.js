@@ -232,8 +232,9 @@ async function load(list) {
     set.free();
   }
   const notes = await startPool();
-  post({ type: 'loaded', views: session.views(), warnings: [...session.warnings(), ...notes], pool: pool?.size ?? 0 });
+  // The 3D view's scene first: the page has it when it hears "loaded".
   scene3d();
+  post({ type: 'loaded', views: session.views(), warnings: [...session.warnings(), ...notes], pool: pool?.size ?? 0 });
   frame();
 }
 

@@ -406,6 +406,7 @@ test('robust: without WebGL the 3D view is a note and the page fits as before', 
   await note.waitFor({ state: 'visible' });
   assert.match(await note.textContent(), /WebGL/);
   await loadToy(page);
+  await page.waitForFunction((n) => document.getElementById('view3d').view3d?.info()?.cameras === n, toyScene.views.length, { timeout: 10_000 });
   const s = await info(page);
   assert.equal(s.webgl, false);
   assert.equal(s.cameras, toyScene.views.length, 'the scene is still taken');
