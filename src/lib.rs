@@ -51,8 +51,8 @@ pub mod wasm;
 pub use camera::{Camera, CameraJson, Convention, MAX_SIDE};
 pub use error::{Error, Result};
 pub use estimator::{
-    robust_weights, CameraCorrection, CameraPrior, Estimator, FitSettings, Phase, Progress, Request, Response,
-    ScaleMode, Shard, Termination, ViewFigures, OBJECT_MARGIN,
+    robust_weights, CameraCorrection, CameraPrior, CameraTest, Estimator, FitSettings, Phase, Progress, Request,
+    Response, ScaleMode, Shard, Termination, ViewFigures, OBJECT_MARGIN,
 };
 pub use io::scene::{load_scene, Scene, SceneJson, ViewJson};
 pub use mask::Mask;

@@ -5,7 +5,7 @@
 //! against the symmetric equivalent of the truth closest to the estimate, so that
 //! the command line, the page and `eval` report the same figures.
 
-use crate::estimator::{CameraCorrection, Estimator, Termination};
+use crate::estimator::{CameraCorrection, CameraTest, Estimator, Termination};
 use crate::metrics::{pose_errors, PoseErrors};
 use crate::pose::{mat3_to_rows, mat4_to_rows, Pose};
 use crate::so3;
@@ -96,6 +96,10 @@ pub struct FitResult {
     /// Why the cameras could not be corrected, when they could not.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub camera_correction_error: Option<String>,
+    /// How much of the loss the corrections removed, and whether the pose and figures
+    /// use them (they are applied only when they explain enough of it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_test: Option<CameraTest>,
     /// Wall-clock seconds, as measured by the caller.
     pub seconds: f64,
     /// Error figures against the scene's ground truth, when it has one (against its
@@ -149,6 +153,7 @@ impl Estimator {
         FitResult {
             camera_corrections,
             camera_correction_error,
+            camera_test: self.camera_test(),
             covariance,
             std_dev,
             uncertainty_error,

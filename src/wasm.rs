@@ -128,6 +128,8 @@ export interface FitResult {
   camera_corrections?: CameraCorrection[];
   /** Why the cameras could not be corrected, when they could not. */
   camera_correction_error?: string;
+  /** The fraction of the loss the corrections removed; they are applied (pose, figures, uncertainty) only when it reaches min_reduction. */
+  camera_test?: { loss_reduction: number; min_reduction: number; applied: boolean };
   seconds: number;
   /** Against the ground truth (its symmetric equivalent closest to the estimate), when given. */
   errors?: Record<string, number>; symmetric?: boolean;

@@ -170,16 +170,23 @@ ui.download.addEventListener('click', () => send('result'));
 ui.fullFrame.addEventListener('change', () => send('view', { full: ui.fullFrame.checked }));
 $('refine-cameras').addEventListener('change', (e) => send('cameras', { on: e.target.checked }));
 
-// The camera corrections of a fit done with "refine cameras" (or why there are none).
-function showCorrections({ corrections, error }) {
+// The camera corrections of a fit done with "refine cameras" (or why there are none),
+// and whether they were applied (only when they explain enough of the loss).
+function showCorrections({ corrections, test, error }) {
   const el = $('camera-corrections');
   el.hidden = !corrections && !error;
+  el.dataset.applied = test ? String(test.applied) : '';
+  const verdict = test
+    ? ` (they remove ${(100 * test.loss_reduction).toFixed(1)} % of the loss: ${
+        test.applied ? 'applied' : `not applied, below ${(100 * test.min_reduction).toFixed(0)} %`
+      })`
+    : '';
   el.textContent = error
     ? `Cameras not corrected: ${error}`
     : (corrections ?? [])
         .map((c) => `${c.view}: ${c.angle_deg.toFixed(2)}°, ${c.shift_pct.toFixed(2)} % of its distance`)
         .join(' · ')
-        .replace(/^/, corrections?.length ? 'Camera corrections — ' : '');
+        .replace(/^/, corrections?.length ? 'Camera corrections — ' : '') + verdict;
 }
 
 function updateButtons() {

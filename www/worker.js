@@ -367,7 +367,7 @@ function done3d(progress) {
   try {
     const result = session.result();
     msg.covariance = result.covariance ?? null;
-    post({ type: 'cameras', corrections: result.camera_corrections ?? null, error: result.camera_correction_error ?? null });
+    post({ type: 'cameras', corrections: result.camera_corrections ?? null, test: result.camera_test ?? null, error: result.camera_correction_error ?? null });
     if (typeof session.suggestViews === 'function') msg.suggestions = session.suggestViews(3);
   } catch (e) {
     msg.error = e?.message ?? String(e);

@@ -256,6 +256,8 @@ pub struct CameraCase {
     pub scale: f64,
     /// ADD relative to the diameter.
     pub add_rel: f64,
+    /// With `refine_cameras`: whether the corrections were applied.
+    pub applied: Option<bool>,
 }
 
 /// The camera-correction check on the scene of `seed` (3 + seed mod 2 views, masks
@@ -330,5 +332,6 @@ pub fn camera_case(
         rotation_deg: e.rotation_deg,
         scale: e.scale,
         add_rel: e.add_rel,
+        applied: est.camera_test().map(|t| t.applied),
     }))
 }

@@ -305,6 +305,7 @@ mod tests {
                 uncertainty_error: None,
                 camera_corrections: None,
                 camera_correction_error: None,
+                camera_test: None,
                 seconds: 1.0,
                 errors: Some(errors),
                 symmetric: Some(false),

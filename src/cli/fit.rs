@@ -67,7 +67,8 @@ pub struct FitOptions {
     pub raster: Option<RasterArg>,
     /// Also estimate a small rotation and translation correction of every view's
     /// camera, jointly with the pose, under a prior (--camera-prior-deg,
-    /// --camera-prior-distance); the result lists each view's correction.
+    /// --camera-prior-distance); the result lists each view's correction. They are
+    /// applied only when they remove at least --camera-min-reduction of the loss.
     #[arg(long)]
     pub refine_cameras: bool,
     /// The prior's standard deviation of a camera's rotation, degrees (default 1).
@@ -77,6 +78,10 @@ pub struct FitOptions {
     /// distance to the object (default 0.01).
     #[arg(long, requires = "refine_cameras")]
     pub camera_prior_distance: Option<f64>,
+    /// Apply the corrections only when they remove at least this fraction of the loss
+    /// (default 0.15; 0 applies them always).
+    #[arg(long, requires = "refine_cameras")]
+    pub camera_min_reduction: Option<f64>,
 }
 
 /// `--raster`.
@@ -155,6 +160,9 @@ impl FitOptions {
             }
             if let Some(d) = self.camera_prior_distance {
                 prior.distance = d;
+            }
+            if let Some(r) = self.camera_min_reduction {
+                prior.min_reduction = r;
             }
             prior.validate().map_err(|e| e.to_string())?;
             s.refine_cameras = Some(prior);
@@ -317,6 +325,18 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
         eprintln!(
             "  camera of {}: corrected by {:.3}° and {:.2}% of its distance",
             c.view, c.angle_deg, c.shift_pct
+        );
+    }
+    if let Some(t) = &result.camera_test {
+        eprintln!(
+            "  cameras: the corrections remove {:.1}% of the loss ({:.0}% needed): {}",
+            100.0 * t.loss_reduction,
+            100.0 * t.min_reduction,
+            if t.applied {
+                "applied"
+            } else {
+                "not applied (the cameras agree with the masks)"
+            }
         );
     }
     Ok(if a.strict && verdict != Verdict::Ok { NOT_OK } else { 0 })

@@ -35,7 +35,7 @@ mod robust;
 mod settings;
 mod shard;
 
-pub use cameras::{CameraCorrection, CameraPrior};
+pub use cameras::{CameraCorrection, CameraPrior, CameraTest};
 pub use robust::robust_weights;
 pub use settings::{FitSettings, Phase, Progress, ScaleMode, Termination, OBJECT_MARGIN};
 pub use shard::{Request, Response, Shard};
@@ -112,6 +112,8 @@ struct Final {
     uncertainty: std::result::Result<Uncertainty, String>,
     /// The camera corrections when asked for, or why they could not be estimated.
     corrections: Option<std::result::Result<Vec<CameraCorrection>, String>>,
+    /// Whether they were applied.
+    camera_test: Option<CameraTest>,
 }
 
 /// Search candidates scored per step.
@@ -622,6 +624,7 @@ impl Estimator {
         let noise = NoiseModel::default();
         let mut corrections = None;
         let mut extra = None;
+        let mut camera_test = None;
         if let Some(prior) = self.settings.refine_cameras {
             let last = self
                 .settings
@@ -646,11 +649,14 @@ impl Estimator {
                 });
             match refined {
                 Ok(r) => {
-                    pose = r.pose;
-                    self.input_views = Some(std::mem::replace(&mut self.views, r.views));
-                    self.tracks[0].best_pose = pose;
+                    if r.test.applied {
+                        pose = r.pose;
+                        self.input_views = Some(std::mem::replace(&mut self.views, r.views));
+                        self.tracks[0].best_pose = pose;
+                        extra = Some(r.extra_covariance);
+                    }
                     corrections = Some(Ok(r.corrections));
-                    extra = Some(r.extra_covariance);
+                    camera_test = Some(r.test);
                 }
                 Err(e) => corrections = Some(Err(e.to_string())),
             }
@@ -693,6 +699,7 @@ impl Estimator {
             judgement,
             uncertainty,
             corrections,
+            camera_test,
         });
         self.objective = None;
         self.phase = Phase::Done;
@@ -720,6 +727,12 @@ impl Estimator {
             .as_ref()
             .and_then(|f| f.corrections.as_ref())
             .map(|c| c.as_ref().map(|v| v.as_slice()).map_err(|e| e.as_str()))
+    }
+
+    /// Once done with `refine_cameras`: how much of the loss the corrections removed
+    /// and whether they were applied (`cameras` module doc "When to apply").
+    pub fn camera_test(&self) -> Option<CameraTest> {
+        self.done.as_ref().and_then(|f| f.camera_test)
     }
 
     /// The pose the fit currently holds (the best so far once done).

@@ -12,15 +12,17 @@
 //!
 //! The definition (the tests' naive oracle implements exactly this):
 //!
-//! 1. `C(p) ∈ {0, 1}` is [`crate::raster::hard::render_projected_into`] (computed
-//!    without the back faces of closed, consistently oriented components, which cover
-//!    nothing more: `EdgeTopology::front_signs`).
-//! 2. A face is *present* when its three vertices are in front of the near plane and
-//!    its doubled projected area exceeds [`DEGENERATE_DOUBLE_AREA`](crate::raster::soft::DEGENERATE_DOUBLE_AREA) px².
+//! 1. `C(p) ∈ {0, 1}` is [`crate::raster::hard::render_projected_into`] of the welded
+//!    triangles (each vertex at its welded representative: the plain raster whenever
+//!    copies coincide exactly, as glTF seams do).
+//! 2. A face is *present* when its three welded vertices are in front of the near
+//!    plane and within the hard raster's guard band, and its doubled area with the
+//!    vertices snapped to 1/1024 px (as the hard raster snaps them) is non-zero.
 //! 3. An edge is a *candidate outline edge* when it has at least one present face and
-//!    all its present faces lie on the same side of the projected edge line (tested
-//!    with each face's third vertex): contours of closed meshes, open borders and
-//!    non-manifold edges alike. Its outward normal `n_out` points away from that side.
+//!    all its present faces lie on the same side of the edge line (the sign of the
+//!    snapped `(b − a) × (c − a)`, c each face's third vertex): contours of closed
+//!    meshes, open borders and non-manifold edges alike. Its outward normal `n_out`
+//!    points away from that side.
 //! 4. For pixel p and candidate e, q is the closest point of the segment to p (the
 //!    segment parameter t clamped to [0, 1]) and `d = |p − q|`. The candidate is
 //!    *accepted for p* only if the coverage is 0 at the pixel centre nearest to
@@ -45,11 +47,16 @@
 //! m-expanded boxes; a band of 16 rows keeps the nearest accepted candidate per pixel
 //! of its tiles that hold candidates; each candidate visits, row by row, only the
 //! columns within m of its line, where `d² = e² + (|b − a|·excess)²` (e the line
-//! distance, excess the parameter's overshoot past the ends) is branch-free. The cost
-//! is the hard coverage plus a few operations per face and edge plus the outline's
-//! m-band. Everything is f64.
+//! distance, excess the parameter's overshoot past the ends) is branch-free. The hard
+//! coverage itself comes from the same pass over the edges (`coverage.rs`: the
+//! triangles' boundary chain, in which every edge between two faces turned the same
+//! way cancels, filled row by row), so the cost is one snap per vertex, one area sign
+//! per face, a few operations per edge and the outline's m-band, with no per-triangle
+//! raster. The geometry of the soft values is f64; signs and coverage are exact
+//! integer arithmetic on the snapped positions.
 
 mod candidates;
+mod coverage;
 mod outline;
 mod pass;
 mod topology;
@@ -60,7 +67,6 @@ pub use topology::{EdgeTopology, WELD_TOLERANCE};
 use crate::camera::{Camera, MAX_SIDE};
 use crate::error::{Error, Result};
 use crate::mask::Mask;
-use crate::raster::hard;
 use crate::raster::project::Projected;
 use crate::raster::soft::SoftSettings;
 use candidates::EdgeSetup;
@@ -94,8 +100,15 @@ pub struct EdgeSilhouette {
     alpha: Vec<f64>,
     coverage: Mask,
     records: Vec<EdgeRecord>,
-    /// Per face: sign of its doubled projected area when present, else 0.
+    /// Per face: sign of its snapped welded doubled area when present, else 0.
     face_sign: Vec<i8>,
+    /// The coverage's scratch (`coverage.rs`): vertices snapped to 1/1024 px, per row
+    /// the column counters; the coverage's summed-area table.
+    snapped: Vec<[i32; 2]>,
+    diff: Vec<i32>,
+    sat: Vec<u32>,
+    /// Edges whose present faces lie on one side, before their setup.
+    candidates: Vec<candidates::Candidate>,
     /// Candidates whose m-box meets the canvas, by increasing edge index.
     edges: Vec<EdgeSetup>,
     outline: usize,
@@ -129,6 +142,10 @@ impl EdgeSilhouette {
             coverage: Mask::empty(0, 0),
             records: Vec::new(),
             face_sign: Vec::new(),
+            snapped: Vec::new(),
+            diff: Vec::new(),
+            sat: Vec::new(),
+            candidates: Vec::new(),
             edges: Vec::new(),
             outline: 0,
             tiles_x: 0,
@@ -236,13 +253,10 @@ impl EdgeSilhouette {
         self.height = h;
         self.settings = *settings;
         self.vertex_count = n;
-        // The back faces of closed, consistently oriented components cover nothing their
-        // front faces do not (topology module doc): skipped.
-        hard::render_projected_culled_into(proj, triangles, camera, &topo.front, &mut self.coverage);
+        self.find_candidates(topo, proj, camera);
         self.alpha.clear();
         self.alpha.extend(self.coverage.data.iter().map(|&c| f64::from(c)));
         self.records.clear();
-        self.find_candidates(topo, proj, triangles);
         self.bin();
         self.tile_pass();
         Ok(())

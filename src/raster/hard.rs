@@ -26,6 +26,7 @@ mod bits;
 mod span;
 
 pub use bits::BitMask;
+pub(crate) use span::snap;
 pub use span::{GUARD_BAND_PX, SUBPIXEL_BITS};
 
 use crate::camera::Camera;
@@ -35,7 +36,7 @@ use crate::mesh::Mesh;
 use crate::pose::Pose;
 use crate::raster::project::{check_visible, project_mesh, Projected};
 use glam::{DVec2, DVec3};
-use span::{snap, triangle_spans};
+use span::triangle_spans;
 
 /// The silhouette of `mesh` under `pose` in `camera`, at the camera's full resolution.
 pub fn render(mesh: &Mesh, pose: &Pose, camera: &Camera) -> Mask {

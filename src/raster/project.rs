@@ -1,7 +1,7 @@
 //! Projection of a posed mesh into a view: model → world (pose) → camera (OpenCV)
 //! → pixels (SPEC §2). The one projection of the crate: the hard, SoftRas and edge
 //! rasterisers all take a [`Projected`] mesh, and the soft ones' backward passes use
-//! the Jacobians kept by a [`PoseProjection`] to chain pixel gradients to the 9 pose
+//! the Jacobians of a [`PoseProjection`] to chain pixel gradients to the 9 pose
 //! parameters.
 //!
 //! Chain rule (pose-gradient order `[ω0, ω1, ω2, t0, t1, t2, ls0, ls1, ls2]`, ω the
@@ -53,7 +53,7 @@ fn near_for(mesh: &Mesh, scale: DVec3) -> f64 {
 /// Projects every vertex of `mesh` under `pose` into `camera`.
 pub fn project_mesh(mesh: &Mesh, pose: &Pose, camera: &Camera) -> Projected {
     let mut p = PoseProjection::default();
-    p.project(mesh, pose, camera, false);
+    p.project(mesh, pose, camera);
     p.proj
 }
 
@@ -68,64 +68,88 @@ pub fn check_visible(view: &str, proj: &Projected) -> Result<()> {
     Ok(())
 }
 
-/// A projection that keeps what the backward passes need: the scaled model points,
-/// the projection Jacobians and the pose. Reusable across iterations (buffers kept).
+/// A projection that keeps what the backward passes need: the camera points, the
+/// pose and the chain to it (the projection Jacobians are computed per vertex when
+/// asked for). Reusable across iterations (buffers kept).
 #[derive(Debug, Clone, Default)]
 pub struct PoseProjection {
     /// Camera points, pixels, near plane.
     pub proj: Projected,
-    /// `s ⊙ X_o` per vertex (empty for [`PoseProjection::from_camera_points`]).
-    scaled: Vec<DVec3>,
-    /// `∂(u, v)/∂(x, y, z)` per vertex (zero behind the near plane).
-    jac: Vec<[DVec3; 2]>,
     pose: Pose,
     camera_rotation: DMat3,
+    /// `X_c = m·y + b`, `m = R_wc·R`, `y = s ⊙ X_o` (identity and zero for
+    /// [`PoseProjection::from_camera_points`]).
+    m: DMat3,
+    b: DVec3,
+    /// The focal lengths, for the Jacobians (computed per vertex when asked).
+    fx: f64,
+    fy: f64,
+    /// Whether the pose chain is available (not for camera points).
+    posed: bool,
 }
 
 impl PoseProjection {
-    /// Projects `mesh` at `pose` into `camera`; with `jacobians`, also keeps what
-    /// [`PoseProjection::pose_gradient`] and [`PoseProjection::vertex_pose_jacobians`] need.
-    pub fn project(&mut self, mesh: &Mesh, pose: &Pose, camera: &Camera, jacobians: bool) {
+    /// Projects `mesh` at `pose` into `camera`. The Jacobians of the backward passes
+    /// are computed from the camera points when asked for, only for the vertices asked
+    /// for (outline vertices, for the edge rasteriser).
+    pub fn project(&mut self, mesh: &Mesh, pose: &Pose, camera: &Camera) {
         let m = camera.rotation * pose.rotation;
         let b = camera.rotation * pose.translation + camera.translation;
-        self.scaled.clear();
-        self.scaled.extend(mesh.positions.iter().map(|p| pose.scale * *p));
         self.proj.cam.clear();
-        self.proj.cam.extend(self.scaled.iter().map(|y| m * *y + b));
+        self.proj
+            .cam
+            .extend(mesh.positions.iter().map(|p| m * (pose.scale * *p) + b));
         self.pose = *pose;
         self.camera_rotation = camera.rotation;
-        self.finish(near_for(mesh, pose.scale), camera, jacobians);
+        (self.m, self.b, self.posed) = (m, b, true);
+        self.finish(near_for(mesh, pose.scale), camera);
     }
 
     /// A projection of given camera-frame points (the camera stage on its own; the
     /// pose chain is then unavailable: [`PoseProjection::camera_gradient`] only).
     pub fn from_camera_points(&mut self, cam: &[DVec3], near: f64, camera: &Camera) {
-        self.scaled.clear();
         self.proj.cam.clear();
         self.proj.cam.extend_from_slice(cam);
         self.pose = Pose::IDENTITY;
         self.camera_rotation = camera.rotation;
-        self.finish(near, camera, true);
+        (self.m, self.b, self.posed) = (DMat3::IDENTITY, DVec3::ZERO, false);
+        self.finish(near, camera);
     }
 
-    fn finish(&mut self, near: f64, camera: &Camera, jacobians: bool) {
+    fn finish(&mut self, near: f64, camera: &Camera) {
         self.proj.near = near;
+        (self.fx, self.fy) = (camera.fx, camera.fy);
         self.proj.uv.clear();
-        self.jac.clear();
-        for c in &self.proj.cam {
+        self.proj.uv.extend(self.proj.cam.iter().map(|c| {
             if c.z >= near {
-                let (uv, j) = camera.project_with_jacobian(*c);
-                self.proj.uv.push(uv);
-                if jacobians {
-                    self.jac.push(j);
-                }
+                camera.project_with_jacobian(*c).0
             } else {
-                self.proj.uv.push(DVec2::splat(f64::NAN));
-                if jacobians {
-                    self.jac.push([DVec3::ZERO; 2]);
-                }
+                DVec2::splat(f64::NAN)
             }
+        }));
+    }
+
+    /// `∂(u, v)/∂(x, y, z)` of vertex `i` (zero behind the near plane), as
+    /// [`Camera::project_with_jacobian`].
+    #[inline]
+    fn jac(&self, i: usize) -> [DVec3; 2] {
+        let c = self.proj.cam[i];
+        if c.z < self.proj.near {
+            return [DVec3::ZERO; 2];
         }
+        let iz = 1.0 / c.z;
+        let (x, y) = (c.x * iz, c.y * iz);
+        [
+            DVec3::new(self.fx * iz, 0.0, -self.fx * x * iz),
+            DVec3::new(0.0, self.fy * iz, -self.fy * y * iz),
+        ]
+    }
+
+    /// `y = s ⊙ X_o` of vertex `i`, recovered from its camera point.
+    #[inline]
+    fn scaled(&self, i: usize) -> DVec3 {
+        debug_assert!(self.posed, "the pose chain needs PoseProjection::project");
+        self.m.transpose() * (self.proj.cam[i] - self.b)
     }
 
     /// Pixel positions (NaN behind the near plane).
@@ -146,7 +170,7 @@ impl PoseProjection {
     /// ∂L/∂X_c of vertex `i` from its ∂L/∂(u, v).
     #[inline]
     pub fn camera_gradient(&self, i: usize, g: DVec2) -> DVec3 {
-        let j = &self.jac[i];
+        let j = self.jac(i);
         j[0] * g.x + j[1] * g.y
     }
 
@@ -156,15 +180,16 @@ impl PoseProjection {
     pub fn pose_gradient(&self, grad_uv: impl Fn(usize) -> DVec2) -> [f64; POSE_DIM] {
         let q = (self.camera_rotation * self.pose.rotation).transpose();
         let (mut gw, mut gt, mut gs) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
-        for (i, (y, j)) in self.scaled.iter().zip(&self.jac).enumerate() {
+        for i in 0..self.len() {
             let g = grad_uv(i);
             if g == DVec2::ZERO {
                 continue;
             }
+            let (y, j) = (self.scaled(i), self.jac(i));
             let h = q * (j[0] * g.x + j[1] * g.y);
             gw += y.cross(h);
             gt += h;
-            gs += *y * h;
+            gs += y * h;
         }
         let gt = self.pose.rotation * gt;
         [gw.x, gw.y, gw.z, gt.x, gt.y, gt.z, gs.x, gs.y, gs.z]
@@ -176,7 +201,7 @@ impl PoseProjection {
         let q = (self.camera_rotation * self.pose.rotation).transpose();
         let (mut gw, mut gt, mut gs) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
         for (i, g) in items {
-            let (y, j) = (self.scaled[i], &self.jac[i]);
+            let (y, j) = (self.scaled(i), self.jac(i));
             let h = q * (j[0] * g.x + j[1] * g.y);
             gw += y.cross(h);
             gt += h;
@@ -191,7 +216,7 @@ impl PoseProjection {
     #[inline]
     pub fn vertex_pose_jacobian(&self, i: usize) -> [[f64x2; 5]; 2] {
         let m = self.camera_rotation * self.pose.rotation;
-        let (y, j) = (self.scaled[i], &self.jac[i]);
+        let (y, j) = (self.scaled(i), self.jac(i));
         let mut rows = [[0.0; 10]; 2];
         for k in 0..3 {
             let mut e = DVec3::ZERO;
@@ -212,12 +237,13 @@ impl PoseProjection {
         let rc = self.camera_rotation;
         let m = rc * r;
         out.clear();
-        for (y, j) in self.scaled.iter().zip(&self.jac) {
+        for i in 0..self.len() {
+            let (y, j) = (self.scaled(i), self.jac(i));
             let mut rows = [[0.0; 10]; 2];
             for k in 0..3 {
                 let mut e = DVec3::ZERO;
                 e[k] = 1.0;
-                let cols = [m * e.cross(*y), rc * e, m * (e * *y)];
+                let cols = [m * e.cross(y), rc * e, m * (e * y)];
                 for (g, col) in cols.iter().enumerate() {
                     rows[0][3 * g + k] = j[0].dot(*col);
                     rows[1][3 * g + k] = j[1].dot(*col);
@@ -251,7 +277,7 @@ mod tests {
             pr.uv.iter().zip(&w).map(|(uv, w)| uv.dot(*w)).sum()
         };
         let mut pp = PoseProjection::default();
-        pp.project(&mesh, &pose, &camera, true);
+        pp.project(&mesh, &pose, &camera);
         let g = pp.pose_gradient(|i| w[i]);
         let mut jac = Vec::new();
         pp.vertex_pose_jacobians(&mut jac);

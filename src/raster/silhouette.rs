@@ -101,8 +101,8 @@ impl SilhouetteRenderer {
         }
     }
 
-    fn render_edge(&mut self, m: &RenderMesh, pose: &Pose, camera: &Camera, s: &SoftSettings, jac: bool) -> Result<()> {
-        self.projection.project(&m.mesh, pose, camera, jac);
+    fn render_edge(&mut self, m: &RenderMesh, pose: &Pose, camera: &Camera, s: &SoftSettings) -> Result<()> {
+        self.projection.project(&m.mesh, pose, camera);
         self.edge
             .render(&m.topology, &self.projection.proj, &m.mesh.triangles, camera, s)
     }
@@ -113,7 +113,7 @@ impl SilhouetteRenderer {
             RasterKind::SoftRas => {
                 self.soft.render(&m.mesh, pose, camera, s)?;
             }
-            RasterKind::Edge => self.render_edge(m, pose, camera, s, false)?,
+            RasterKind::Edge => self.render_edge(m, pose, camera, s)?,
         }
         Ok(self.alpha())
     }
@@ -131,7 +131,7 @@ impl SilhouetteRenderer {
         if self.kind == RasterKind::SoftRas {
             return self.soft.render_with_gradients(&m.mesh, pose, camera, s, field);
         }
-        self.render_edge(m, pose, camera, s, true)?;
+        self.render_edge(m, pose, camera, s)?;
         self.index_touched(m.mesh.positions.len());
         // Each field's ∂/∂uv per touched vertex, in one pass over the records.
         self.grad_buf.clear();
@@ -196,7 +196,7 @@ impl SilhouetteRenderer {
             self.soft.render_with_jacobians(&m.mesh, pose, camera, s, visit)?;
             return Ok(());
         }
-        self.render_edge(m, pose, camera, s, true)?;
+        self.render_edge(m, pose, camera, s)?;
         self.index_touched(m.mesh.positions.len());
         self.vertex_jac.clear();
         let p = &self.projection;

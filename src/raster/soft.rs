@@ -286,7 +286,7 @@ impl SoftRasterizer {
 
     /// Projects the posed mesh and prepares the 2-D stage (no tile pass).
     pub(crate) fn prepare(&mut self, mesh: &Mesh, pose: &Pose, camera: &Camera, settings: &SoftSettings) -> Result<()> {
-        self.projection.project(mesh, pose, camera, true);
+        self.projection.project(mesh, pose, camera);
         self.silhouette.prepare(
             self.projection.uv(),
             &mesh.triangles,

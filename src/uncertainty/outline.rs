@@ -63,7 +63,7 @@ fn outline(
     noise: &NoiseModel,
 ) -> Result<(PoseProjection, Vec<OutlineSample>)> {
     let mut pp = PoseProjection::default();
-    pp.project(&model.mesh, pose, camera, true);
+    pp.project(&model.mesh, pose, camera);
     let mut sil = EdgeSilhouette::new();
     let soft = SoftSettings { sigma: 0.02, eps: 1e-4 };
     sil.render(model.topology(), &pp.proj, &model.mesh.triangles, camera, &soft)?;

@@ -1,7 +1,8 @@
 //! `Session.setRefineCameras(on, rotationDeg, distance)`: the page's camera-correction
 //! switch (`fit --refine-cameras`): each view's camera is corrected jointly with the
 //! pose under a prior, at the end of the fit; the result then lists
-//! `camera_corrections`.
+//! `camera_corrections` and `camera_test` (applied only when they explain at least
+//! 15 % of the loss).
 
 use super::session::Session;
 use crate::estimator::CameraPrior;
@@ -25,6 +26,7 @@ impl Session {
             CameraPrior {
                 rotation_deg: rotation_deg.unwrap_or(d.rotation_deg),
                 distance: distance.unwrap_or(d.distance),
+                ..d
             }
         });
         self.estimator_mut().set_refine_cameras(prior)?;

@@ -482,6 +482,13 @@ test('refine cameras: the switch makes the fit correct every view\'s camera; the
   const [download] = await Promise.all([page.waitForEvent('download'), byId(page, 'download').click()]);
   const result = JSON.parse(readFileSync(await download.path(), 'utf8'));
   assert.equal(result.camera_corrections.length, 4);
+  // The example's cameras are exact: the corrections explain little of the loss and the
+  // page says whether they were applied, as the result does.
+  const test = result.camera_test;
+  assert.ok(test.loss_reduction >= 0 && test.loss_reduction < 1, JSON.stringify(test));
+  assert.equal(test.applied, test.loss_reduction >= test.min_reduction);
+  assert.equal(await shown.getAttribute('data-applied'), String(test.applied));
+  assert.match(text, test.applied ? /: applied\)$/ : /: not applied, below 15 %\)$/, text);
   for (const c of result.camera_corrections) {
     // The toy's cameras are exact: the corrections stay well inside the 1° / 1 % prior.
     assert.ok(c.angle_deg < 1 && c.shift_pct < 1, JSON.stringify(c));

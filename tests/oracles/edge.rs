@@ -10,7 +10,7 @@ use glam::{DVec2, DVec3};
 use localisebot::raster::edge::{EdgeRecord, EdgeSilhouette, EdgeTopology, WELD_TOLERANCE};
 use localisebot::raster::hard;
 use localisebot::raster::project::Projected;
-use localisebot::raster::soft::{SoftSettings, DEGENERATE_DOUBLE_AREA};
+use localisebot::raster::soft::SoftSettings;
 use localisebot::{so3, Camera, Mask, Mesh, Pose};
 use std::collections::HashMap;
 
@@ -66,10 +66,19 @@ pub fn oracle(positions: &[DVec3], tris: &[[u32; 3]], proj: &Projected, cam: &Ca
         }
     }
     let uv = &proj.uv;
+    // Present: the welded vertices in front and within the guard band, and the doubled
+    // area of the face snapped to 1/1024 px non-zero; sides from the snapped positions.
+    let snapped = |i: u32| -> Option<[i64; 2]> {
+        let p = uv[i as usize];
+        (proj.cam[i as usize].z >= proj.near && p.x.abs() <= hard::GUARD_BAND_PX && p.y.abs() <= hard::GUARD_BAND_PX)
+            .then(|| [p.x, p.y].map(|v| (v * f64::from(1u32 << hard::SUBPIXEL_BITS)).round_ties_even() as i64))
+    };
+    let cross = |a: [i64; 2], b: [i64; 2], c: [i64; 2]| {
+        ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).signum()
+    };
     let present = |f: usize| {
-        let [a, b, c] = tris[f].map(|i| i as usize);
-        [a, b, c].iter().all(|&i| proj.cam[i].z >= proj.near)
-            && (uv[b] - uv[a]).perp_dot(uv[c] - uv[a]).abs() > DEGENERATE_DOUBLE_AREA
+        let w = tris[f].map(|i| snapped(rep[i as usize]));
+        matches!(w, [Some(a), Some(b), Some(c)] if cross(a, b, c) != 0)
     };
     let mut keys: Vec<(u32, u32)> = adj.keys().copied().collect();
     keys.sort();
@@ -79,7 +88,10 @@ pub fn oracle(positions: &[DVec3], tris: &[[u32; 3]], proj: &Projected, cam: &Ca
         let sides: Vec<f64> = adj[&(a, b)]
             .iter()
             .filter(|(f, _)| present(*f))
-            .map(|(_, c)| (pb - pa).perp_dot(uv[*c as usize] - pa).signum())
+            .map(|(_, c)| {
+                let [sa, sb, sc] = [a, b, rep[*c as usize]].map(|i| snapped(i).unwrap());
+                cross(sa, sb, sc) as f64
+            })
             .collect();
         if sides.is_empty() || sides.iter().any(|&x| x != sides[0]) {
             continue;
@@ -94,7 +106,9 @@ pub fn oracle(positions: &[DVec3], tris: &[[u32; 3]], proj: &Projected, cam: &Ca
             out: -sides[0] * left,
         });
     }
-    let coverage = hard::render_projected(proj, tris, cam);
+    // The hard raster of the welded triangles.
+    let welded: Vec<[u32; 3]> = tris.iter().map(|t| t.map(|i| rep[i as usize])).collect();
+    let coverage = hard::render_projected(proj, &welded, cam);
     let (w, h) = (cam.width as i64, cam.height as i64);
     let c_at = |x: i64, y: i64| x >= 0 && y >= 0 && x < w && y < h && coverage.data[(y * w + x) as usize] != 0;
     let m2 = s.cutoff_sq();

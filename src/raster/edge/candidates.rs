@@ -1,11 +1,15 @@
 //! The candidate outline edges of one render (module doc of `edge.rs`, steps 2–4):
 //! present faces, the edges whose present faces all lie on one side, their outward
 //! normals, and the accept test decided once per edge where it cannot depend on the
-//! pixel.
+//! pixel (a summed-area table of the coverage counts a box's covered pixels). The one
+//! pass over the edges also gives the coverage its boundary chain (`coverage.rs`).
 
+use super::coverage::chain_edge;
+use super::topology::{MANY_FACES, NO_FACE};
 use super::{EdgeSilhouette, EdgeTopology};
+use crate::camera::Camera;
+use crate::raster::hard::{self, SUBPIXEL_BITS};
 use crate::raster::project::Projected;
-use crate::raster::soft::DEGENERATE_DOUBLE_AREA;
 use glam::DVec2;
 
 /// A candidate outline edge ready for the tile pass.
@@ -69,8 +73,15 @@ pub(super) enum Accept {
     PerPixel,
 }
 
-/// Largest box (pixel cells) [`EdgeSilhouette::classify`] scans.
-const CLASSIFY_CELLS: i64 = 48;
+/// Largest box (pixel cells) [`EdgeSilhouette::classify`] decides at once (beyond any
+/// canvas; keeps its integer arithmetic far from overflow).
+const MAX_CLASSIFY_CELLS: f64 = 1e12;
+
+/// A snapped position back in pixels.
+#[inline(always)]
+fn unsnap(p: [i32; 2]) -> DVec2 {
+    DVec2::new(f64::from(p[0]), f64::from(p[1])) / f64::from(1u32 << SUBPIXEL_BITS)
+}
 
 /// `max(a, b)` as one instruction (no NaN handling: the inputs are finite).
 #[inline(always)]
@@ -97,38 +108,109 @@ pub(super) fn ceil_i64(v: f64) -> i64 {
     t.saturating_add(i64::from((t as f64) < v))
 }
 
+/// An edge whose present faces all lie on one side (before its setup).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Candidate {
+    pub(super) edge: u32,
+    /// Whether its faces lie left of a → b.
+    pub(super) left: bool,
+    /// Its ends snapped (both are: its faces are present).
+    pub(super) a: [i32; 2],
+    pub(super) b: [i32; 2],
+}
+
 impl EdgeSilhouette {
-    /// Present faces, then candidate outline edges and their setups.
-    pub(super) fn find_candidates(&mut self, topo: &EdgeTopology, proj: &Projected, triangles: &[[u32; 3]]) {
+    /// The hard coverage (`coverage.rs`), present faces, then candidate outline edges
+    /// and their setups.
+    pub(super) fn find_candidates(&mut self, topo: &EdgeTopology, proj: &Projected, camera: &Camera) {
+        let chain = self.snap_vertices(proj);
+        self.face_signs(topo);
+        if chain {
+            self.edge_pass::<true>(topo);
+            self.chain_fill();
+        } else {
+            self.edge_pass::<false>(topo);
+            // The back faces of closed, consistently oriented components cover nothing
+            // their front faces do not (topology module doc): skipped.
+            hard::render_projected_culled_into(proj, &topo.welded_faces, camera, &topo.front, &mut self.coverage);
+        }
+        self.build_sat();
+        self.setup_candidates(topo, proj);
+    }
+
+    /// One pass over the edges: the candidates (present faces on one side) and, with
+    /// `CHAIN`, each edge's net weight in the coverage's counters.
+    fn edge_pass<const CHAIN: bool>(&mut self, topo: &EdgeTopology) {
+        self.candidates.clear();
+        // The side of face (a, b, c) is the sign of (b − a) × (c − a), c its third
+        // vertex: its area's sign when it runs a → b, the opposite when b → a. Faces
+        // left of a → b count as positive.
+        let sign = &self.face_sign;
+        let side = |packed: u32| {
+            let s = i32::from(sign[(packed >> 1) as usize]);
+            if packed & 1 == 1 {
+                s
+            } else {
+                -s
+            }
+        };
+        for (e, &[p0, p1]) in topo.pairs.iter().enumerate() {
+            let (left, right, net) = if p0 == MANY_FACES {
+                let (mut left, mut right, mut net) = (false, false, 0i32);
+                for inc in topo.incidences(e) {
+                    let s = side(inc.face << 1 | u32::from(inc.forward));
+                    left |= s > 0;
+                    right |= s < 0;
+                    net += s;
+                }
+                (left, right, net)
+            } else {
+                let s0 = side(p0);
+                let s1 = if p1 == NO_FACE { 0 } else { side(p1) };
+                ((s0 > 0) | (s1 > 0), (s0 < 0) | (s1 < 0), s0 + s1)
+            };
+            // Faces on one side only imply a non-zero net: most edges stop here.
+            if net == 0 {
+                continue;
+            }
+            let [ia, ib] = topo.ends[e];
+            let (a, b) = (self.snapped[ia as usize], self.snapped[ib as usize]);
+            if CHAIN {
+                chain_edge(&mut self.diff, self.width, self.height, a, b, net);
+            }
+            if left != right {
+                self.candidates.push(Candidate {
+                    edge: e as u32,
+                    left,
+                    a,
+                    b,
+                });
+            }
+        }
+    }
+
+    /// The setups of the candidates whose m-box meets the canvas and that the accept
+    /// test does not reject everywhere.
+    fn setup_candidates(&mut self, topo: &EdgeTopology, proj: &Projected) {
         let uv = &proj.uv;
-        self.face_sign.clear();
-        self.face_sign.extend(triangles.iter().map(|t| {
-            let [a, b, c] = t.map(|i| i as usize);
-            let front = proj.in_front(a) & proj.in_front(b) & proj.in_front(c);
-            let cr = (uv[b] - uv[a]).perp_dot(uv[c] - uv[a]);
-            // A NaN area (a vertex behind the camera) fails the comparison: not present.
-            let present = front & (cr.abs() > DEGENERATE_DOUBLE_AREA);
-            (i8::from(cr > 0.0) - i8::from(cr < 0.0)) * i8::from(present)
-        }));
         let m = self.settings.cutoff_sq().sqrt();
         let (wm, hm) = ((self.width - 1) as f64, (self.height - 1) as f64);
         self.edges.clear();
-        self.outline = 0;
-        for (e, &[ia, ib]) in topo.ends.iter().enumerate() {
-            // The side of face (a, b, c) is the sign of (b − a) × (c − a), c its third
-            // vertex: its area's sign when it runs a → b, the opposite when b → a.
-            // Faces left of a → b count as positive.
-            let (mut left, mut right) = (false, false);
-            for inc in topo.incidences(e) {
-                let s = self.face_sign[inc.face as usize];
-                let s = if inc.forward { s } else { -s };
-                left |= s > 0;
-                right |= s < 0;
-            }
-            if left == right {
+        self.outline = self.candidates.len();
+        for k in 0..self.candidates.len() {
+            let Candidate { edge, left, a, b } = self.candidates[k];
+            // Every probe lies within one pixel of the segment (and the snapped ends
+            // within 1/2048 px of the ends): a covered box around it rejects a hidden
+            // contour before its setup.
+            let (sa, sb) = (unsnap(a), unsnap(b));
+            let (slo, shi) = (sa.min(sb), sa.max(sb));
+            if shi.x < -m - 1.0 || shi.y < -m - 1.0 || slo.x > wm + m + 1.0 || slo.y > hm + m + 1.0 {
                 continue;
             }
-            self.outline += 1;
+            if self.classify(slo - DVec2::splat(1.001), shi + DVec2::splat(1.001)) == Accept::Never {
+                continue;
+            }
+            let [ia, ib] = topo.ends[edge as usize];
             let (a, b) = (uv[ia as usize], uv[ib as usize]);
             let lo = a.min(b) - DVec2::splat(m);
             let hi = a.max(b) + DVec2::splat(m);
@@ -170,37 +252,56 @@ impl EdgeSilhouette {
         }
     }
 
+    /// The summed-area table of the coverage: `sat[(y + 1)(w + 1) + x + 1]` counts the
+    /// covered pixels in columns `0..=x` of rows `0..=y`.
+    fn build_sat(&mut self) {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let stride = w + 1;
+        self.sat.clear();
+        self.sat.resize(stride * (h + 1), 0);
+        for y in 0..h {
+            let mut run = 0u32;
+            for x in 0..w {
+                run += u32::from(self.coverage.data[y * w + x] != 0);
+                self.sat[(y + 1) * stride + x + 1] = self.sat[y * stride + x + 1] + run;
+            }
+        }
+    }
+
     /// The accept test of a whole candidate at once, when it cannot depend on the pixel:
     /// every probe `q + n_out` lies on the segment `ra`–`rb` (the edge moved by n_out),
     /// so if all pixel cells of that segment's box (plus a rounding slack) have the same
-    /// verdict, that is the verdict for every pixel. Boxes of more than
-    /// [`CLASSIFY_CELLS`] cells are left to the per-pixel test.
+    /// verdict (cells off the canvas are background), that is the verdict for every
+    /// pixel. Counted with the summed-area table.
     fn classify(&self, ra: DVec2, rb: DVec2) -> Accept {
         const SLACK: f64 = 1e-7;
         let (w, h) = (self.width as i64, self.height as i64);
         let lo = ra.min(rb) - DVec2::splat(SLACK);
         let hi = ra.max(rb) + DVec2::splat(SLACK);
-        // The box spans at most (extent + 2) cells a side; NaN also goes per pixel.
+        // Boxes beyond any canvas (or NaN) are left to the per-pixel test.
         let size = hi - lo + DVec2::splat(2.0);
         let cells = size.x * size.y;
-        if cells.is_nan() || cells > CLASSIFY_CELLS as f64 {
+        if cells.is_nan() || cells > MAX_CLASSIFY_CELLS {
             return Accept::PerPixel;
         }
         let (x0, x1) = (floor_i64(lo.x + 0.5), floor_i64(hi.x + 0.5));
         let (y0, y1) = (floor_i64(lo.y + 0.5), floor_i64(hi.y + 0.5));
-        let (mut yes, mut no) = (false, false);
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                let covered =
-                    (0..w).contains(&x) && (0..h).contains(&y) && self.coverage.data[(y * w + x) as usize] != 0;
-                no |= covered;
-                yes |= !covered;
-            }
-        }
-        match (yes, no) {
-            (true, false) => Accept::Always,
-            (false, true) => Accept::Never,
-            _ => Accept::PerPixel,
+        let total = (x1 - x0 + 1) * (y1 - y0 + 1);
+        let (cx0, cx1) = (x0.max(0), x1.min(w - 1));
+        let (cy0, cy1) = (y0.max(0), y1.min(h - 1));
+        let covered = if cx0 <= cx1 && cy0 <= cy1 {
+            let s = (w + 1) as usize;
+            let at = |x: i64, y: i64| i64::from(self.sat[y as usize * s + x as usize]);
+            at(cx1 + 1, cy1 + 1) - at(cx0, cy1 + 1) - at(cx1 + 1, cy0) + at(cx0, cy0)
+        } else {
+            0
+        };
+        if covered == 0 {
+            Accept::Always
+        } else if covered == total {
+            Accept::Never
+        } else {
+            Accept::PerPixel
         }
     }
 }

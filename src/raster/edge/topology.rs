@@ -26,6 +26,11 @@ use glam::DVec3;
 /// Grid step of the weld, relative to the bounding-box diagonal.
 pub const WELD_TOLERANCE: f64 = 1e-7;
 
+/// An absent second face in [`EdgeTopology`]'s `pairs`.
+pub(crate) const NO_FACE: u32 = u32::MAX;
+/// An edge with more than two faces in [`EdgeTopology`]'s `pairs`.
+pub(crate) const MANY_FACES: u32 = u32::MAX - 1;
+
 /// One face adjacent to an edge.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Incidence {
@@ -44,6 +49,13 @@ pub struct EdgeTopology {
     pub(crate) face_count: usize,
     /// Number of distinct welded vertices.
     pub(crate) welded: usize,
+    /// Per edge, its faces packed for the per-render pass: `face << 1 | forward` of its
+    /// first two incidences ([`NO_FACE`] when it has one), or `[MANY_FACES, _]` when it
+    /// has more than two (then read `incidences`).
+    pub(crate) pairs: Vec<[u32; 2]>,
+    /// Per face, its vertices' welded representatives (all 0 for a face referring to
+    /// a vertex beyond the positions).
+    pub(crate) welded_faces: Vec<[u32; 3]>,
     /// Per edge, its ends as representative (smallest original) vertex indices,
     /// `ends[e][0] < ends[e][1]`; edges sorted by `(ends[0], ends[1])`.
     pub(crate) ends: Vec<[u32; 2]>,
@@ -80,9 +92,20 @@ impl EdgeTopology {
             vertex_count: n,
             face_count: triangles.len(),
             welded: rep.iter().enumerate().filter(|&(i, &r)| r as usize == i).count(),
+            welded_faces: triangles
+                .iter()
+                .map(|t| {
+                    if t.iter().all(|&i| (i as usize) < n) {
+                        t.map(|i| rep[i as usize])
+                    } else {
+                        [0; 3]
+                    }
+                })
+                .collect(),
             ends: Vec::new(),
             start: vec![0],
             incidences: Vec::with_capacity(half.len()),
+            pairs: Vec::new(),
             front: Vec::new(),
         };
         for (i, &(a, b, face, forward)) in half.iter().enumerate() {
@@ -97,6 +120,14 @@ impl EdgeTopology {
         if !half.is_empty() {
             topo.start.push(topo.incidences.len() as u32);
         }
+        let pack = |i: &Incidence| i.face << 1 | u32::from(i.forward);
+        topo.pairs = (0..topo.ends.len())
+            .map(|e| match topo.incidences(e) {
+                [a] => [pack(a), NO_FACE],
+                [a, b] => [pack(a), pack(b)],
+                _ => [MANY_FACES, 0],
+            })
+            .collect();
         topo.front = front_signs(&topo, positions, triangles);
         topo
     }
