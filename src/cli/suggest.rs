@@ -7,6 +7,7 @@
 //! the scene), and their predicted figures on standard error.
 
 use super::files::{load_pose, load_scene_file, read_text, to_json, CliResult};
+use super::fit::ScaleArg;
 use clap::Args;
 use localisebot::loss::target::Window;
 use localisebot::optim::lm::Free;
@@ -30,6 +31,10 @@ pub struct SuggestArgs {
     /// How many cameras to print (default 3).
     #[arg(long, default_value_t = 3)]
     pub top: usize,
+    /// The scale the fit estimated, as `fit --scale` (default anisotropic): a scale
+    /// that was not fitted is not uncertain, and no photograph is chosen to pin it.
+    #[arg(long, value_enum)]
+    pub scale: Option<ScaleArg>,
 }
 
 /// Runs `suggest-view`.
@@ -65,7 +70,11 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
         &windows,
         &pose,
         &weights,
-        Free::All,
+        match a.scale {
+            None | Some(ScaleArg::Anisotropic) => Free::All,
+            Some(ScaleArg::Isotropic) => Free::IsotropicScale,
+            Some(ScaleArg::Fixed) => Free::NoScale,
+        },
         candidates.as_deref(),
         &NoiseModel::default(),
     )

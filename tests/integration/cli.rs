@@ -642,3 +642,56 @@ fn synth_writes_a_procedural_shape_in_each_mesh_format() {
     ]);
     assert_error(&o, &["--mesh-format", "--shape"]);
 }
+
+#[test]
+fn suggest_view_prints_cameras_that_look_at_the_object() {
+    let d = tmp("suggest");
+    synth(
+        &d,
+        "gltf/Duck/glTF-Binary/Duck.glb",
+        "2",
+        &["--width", "96", "--height", "80"],
+    );
+    let scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("scene.json")).unwrap()).unwrap();
+    std::fs::write(d.join("gt.json"), scene["ground_truth_pose"].to_string()).unwrap();
+    let (scene_path, gt) = (d.join("scene.json"), d.join("gt.json"));
+    let suggest = |extra: &[&str]| {
+        let mut args = vec!["suggest-view", scene_path.to_str().unwrap(), gt.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    let o = suggest(&["--top", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cams: Vec<serde_json::Value> = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(cams.len(), 2);
+    // The object's centre (the pose's translation is near it) projects into each
+    // suggested camera's image, in front of it; view 0's intrinsics are kept.
+    let t: Vec<f64> = serde_json::from_value(scene["ground_truth_pose"]["translation"].clone()).unwrap();
+    for c in &cams {
+        assert_eq!(c["width"], scene["views"][0]["camera"]["width"]);
+        let m: Vec<Vec<f64>> = serde_json::from_value(c["world_to_camera"].clone()).unwrap();
+        let p: Vec<f64> = (0..3)
+            .map(|i| (0..3).map(|j| m[i][j] * t[j]).sum::<f64>() + m[i][3])
+            .collect();
+        assert!(p[2] > 0.0, "behind the camera: {c}");
+        let u = c["fx"].as_f64().unwrap() * p[0] / p[2] + c["cx"].as_f64().unwrap();
+        let v = c["fy"].as_f64().unwrap() * p[1] / p[2] + c["cy"].as_f64().unwrap();
+        assert!(
+            (0.0..96.0).contains(&u) && (0.0..80.0).contains(&v),
+            "({u}, {v}) off {c}"
+        );
+    }
+    // The expected ADD now, as printed: with the scale not fitted it is smaller.
+    let now = |o: &Output| -> f64 {
+        let e = stderr(o);
+        let tail = e.split("expected RMS ADD now ").nth(1).unwrap_or_else(|| panic!("{e}"));
+        tail.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let fixed = suggest(&["--top", "1", "--scale", "fixed"]);
+    assert!(fixed.status.success(), "{}", stderr(&fixed));
+    assert!(now(&fixed) < now(&o), "{} vs {}", now(&fixed), now(&o));
+    // A missing candidates file is named.
+    let missing = d.join("nope.json");
+    assert_error(&suggest(&["--candidates", missing.to_str().unwrap()]), &["nope.json"]);
+}
