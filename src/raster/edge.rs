@@ -268,7 +268,7 @@ mod tests {
     use super::*;
     use glam::DVec3;
 
-    fn flat(uv: &[DVec2]) -> Projected {
+    pub(super) fn flat(uv: &[DVec2]) -> Projected {
         Projected {
             cam: vec![DVec3::Z; uv.len()],
             uv: uv.to_vec(),
@@ -276,7 +276,7 @@ mod tests {
         }
     }
 
-    fn camera(w: u32, h: u32) -> Camera {
+    pub(super) fn camera(w: u32, h: u32) -> Camera {
         Camera::look_at(DVec3::new(0.0, 0.0, -1.0), DVec3::ZERO, DVec3::Y, w, h, 10.0)
     }
 

@@ -145,10 +145,10 @@ impl PoseProjection {
         ]
     }
 
-    /// `y = s ⊙ X_o` of vertex `i`, recovered from its camera point.
+    /// `y = s ⊙ X_o` of vertex `i`, recovered from its camera point (callers check
+    /// `posed`).
     #[inline]
     fn scaled(&self, i: usize) -> DVec3 {
-        debug_assert!(self.posed, "the pose chain needs PoseProjection::project");
         self.m.transpose() * (self.proj.cam[i] - self.b)
     }
 
@@ -175,9 +175,12 @@ impl PoseProjection {
     }
 
     /// Chains per-vertex ∂L/∂(u, v) (`grad_uv(i)`) through the projection and the
-    /// pose to `[ω, t, ls]` (module doc). Needs a [`PoseProjection::project`] with
-    /// Jacobians.
+    /// pose to `[ω, t, ls]` (module doc). Zero after
+    /// [`PoseProjection::from_camera_points`], which has no pose chain.
     pub fn pose_gradient(&self, grad_uv: impl Fn(usize) -> DVec2) -> [f64; POSE_DIM] {
+        if !self.posed {
+            return [0.0; POSE_DIM];
+        }
         let q = (self.camera_rotation * self.pose.rotation).transpose();
         let (mut gw, mut gt, mut gs) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
         for i in 0..self.len() {
@@ -198,6 +201,9 @@ impl PoseProjection {
     /// As [`PoseProjection::pose_gradient`] for a sparse gradient: `(vertex, ∂L/∂(u, v))`
     /// pairs (each vertex at most once).
     pub fn pose_gradient_sparse(&self, items: impl Iterator<Item = (usize, DVec2)>) -> [f64; POSE_DIM] {
+        if !self.posed {
+            return [0.0; POSE_DIM];
+        }
         let q = (self.camera_rotation * self.pose.rotation).transpose();
         let (mut gw, mut gt, mut gs) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
         for (i, g) in items {
@@ -212,9 +218,12 @@ impl PoseProjection {
     }
 
     /// `∂(u, v)/∂θ` of vertex `i` (rows u, v; the 9 columns `[ω, t, ls]` in lane pairs,
-    /// the 10th zero).
+    /// the 10th zero; zero after [`PoseProjection::from_camera_points`]).
     #[inline]
     pub fn vertex_pose_jacobian(&self, i: usize) -> [[f64x2; 5]; 2] {
+        if !self.posed {
+            return [[f64x2::ZERO; 5]; 2];
+        }
         let m = self.camera_rotation * self.pose.rotation;
         let (y, j) = (self.scaled(i), self.jac(i));
         let mut rows = [[0.0; 10]; 2];
@@ -237,6 +246,9 @@ impl PoseProjection {
         let rc = self.camera_rotation;
         let m = rc * r;
         out.clear();
+        if !self.posed {
+            return;
+        }
         for i in 0..self.len() {
             let (y, j) = (self.scaled(i), self.jac(i));
             let mut rows = [[0.0; 10]; 2];

@@ -125,23 +125,11 @@ pub(super) fn chain_edge(diff: &mut [i32], width: u32, height: u32, a: [i32; 2],
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::{camera, flat};
     use super::*;
     use crate::raster::hard;
     use crate::raster::soft::SoftSettings;
-    use crate::Camera;
     use glam::{DVec2, DVec3};
-
-    fn flat(uv: &[DVec2]) -> Projected {
-        Projected {
-            cam: vec![DVec3::Z; uv.len()],
-            uv: uv.to_vec(),
-            near: 1e-3,
-        }
-    }
-
-    fn camera(w: u32, h: u32) -> Camera {
-        Camera::look_at(DVec3::new(0.0, 0.0, -1.0), DVec3::ZERO, DVec3::Y, w, h, 10.0)
-    }
 
     /// The edge render's coverage against the hard raster of all triangles.
     fn check(uv: &[DVec2], tris: &[[u32; 3]], w: u32, h: u32) -> usize {
