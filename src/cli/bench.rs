@@ -263,10 +263,7 @@ fn real_scene(lmo: &Path) -> CliResult<Scene> {
 fn fit_row(name: &str, mesh: &Mesh, views: Vec<View>, truth: &Pose, size: &str, raster: RasterKind) -> CliResult<Row> {
     let n = views.len();
     let start = Instant::now();
-    let settings = FitSettings {
-        raster,
-        ..FitSettings::default()
-    };
+    let settings = FitSettings::for_raster(raster);
     let mut est = Estimator::new(mesh.clone(), views, None, settings).map_err(|e| e.to_string())?;
     est.run(usize::MAX).map_err(|e| e.to_string())?;
     let secs = start.elapsed().as_secs_f64();

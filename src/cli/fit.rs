@@ -172,6 +172,7 @@ impl FitOptions {
         }
         if let Some(r) = self.raster {
             s.raster = r.kind();
+            s.stages = FitSettings::for_raster(s.raster).stages;
         }
         s.validate().map_err(|e| e.to_string())?;
         Ok(s)

@@ -87,6 +87,19 @@ impl Default for FitSettings {
 }
 
 impl FitSettings {
+    /// The defaults with soft rasteriser `raster` and its schedule (the default one for
+    /// the silhouette-edge rasteriser, [`StageSettings::softras_schedule`] for SoftRas).
+    pub fn for_raster(raster: RasterKind) -> FitSettings {
+        FitSettings {
+            raster,
+            stages: match raster {
+                RasterKind::Edge => StageSettings::default_schedule(),
+                RasterKind::SoftRas => StageSettings::softras_schedule(),
+            },
+            ..FitSettings::default()
+        }
+    }
+
     /// The default object window (a square around the mask, 30 % margin on each side).
     pub fn window_object_default(&self) -> WindowMode {
         WindowMode::Object { margin: OBJECT_MARGIN }
@@ -185,4 +198,22 @@ pub struct Progress {
     pub termination: Option<Termination>,
     /// The verdict, once done.
     pub verdict: Option<Verdict>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_rasteriser_gets_its_own_schedule() {
+        let last = |s: &FitSettings| s.stages.last().unwrap().sigma;
+        let edge = FitSettings::for_raster(RasterKind::Edge);
+        let soft = FitSettings::for_raster(RasterKind::SoftRas);
+        assert_eq!(edge.stages, FitSettings::default().stages);
+        assert_eq!((edge.raster, soft.raster), (RasterKind::Edge, RasterKind::SoftRas));
+        assert_eq!(last(&edge), 0.0005);
+        assert_eq!(last(&soft), 0.02);
+        assert_eq!(edge.stages.len(), soft.stages.len());
+        assert!(edge.validate().is_ok() && soft.validate().is_ok());
+    }
 }
