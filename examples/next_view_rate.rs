@@ -1,9 +1,13 @@
 //! The next-best-view check: for synthetic Duck scenes (seeds FIRST..LAST, 2 views,
-//! 160×120, masks roughened by 1 px), how often adding the top-ranked of 16 sphere
+//! 160×120, masks roughened by 1 px), how often adding the top-ranked of 64 sphere
 //! candidates reduces the true ADD more than the median of 5 random candidates
 //! (BENCHMARKS.md "Next best view").
 //!
 //!     cargo run --release --example next_view_rate -- FIRST LAST
+//!
+//! Environment: `SPREAD` (degrees between the two stops; default the synthetic
+//! scene's cameras), `NOISE` (px, default 1), `NV` (candidates, default 64), `MESH` (a
+//! mesh file or a shape name of `synth --shape`, default the shared Duck).
 
 use localisebot::app::coverage::{next_view_case, CoverageScenes};
 use localisebot::io;
@@ -12,12 +16,19 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let first: u64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(300);
     let last: u64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(319);
-    let path = concat!(
+    let default = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../shared/data/gltf/Duck/glTF-Binary/Duck.glb"
     );
-    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    let mesh = io::load_mesh(path, &bytes, &|_| None).expect("the Duck loads");
+    let path = std::env::var("MESH").unwrap_or_else(|_| default.to_string());
+    let path = path.as_str();
+    let mesh = match localisebot::app::shapes::by_name(path) {
+        Some(m) => m,
+        None => {
+            let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+            io::load_mesh(path, &bytes, &|_| None).expect("the mesh loads")
+        }
+    };
     let scenes = CoverageScenes {
         width: 160,
         height: 120,

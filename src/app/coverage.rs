@@ -161,90 +161,153 @@ pub fn next_view_case(
     randoms: usize,
     spread_deg: Option<f64>,
 ) -> Result<Option<NextViewCase>> {
-    use crate::uncertainty::sphere_candidates;
     use rand::seq::SliceRandom;
     use rand::SeedableRng;
-    let settings = SynthSettings {
-        views: 2,
-        width: scenes.width,
-        height: scenes.height,
-        seed,
-        ..Default::default()
-    };
-    let mut scene = synthesize(mesh, &settings, None)?;
-    if let Some(spread) = spread_deg {
-        // Two stops of an arm on one side of the object: view 1 is view 0 turned by
-        // `spread` about view 0's image-up through the object's centre.
-        let c0 = scene.cameras[0];
-        let centre = mesh
-            .bounds()
-            .map_or(scene.pose.translation, |b| scene.pose.apply(b.centre()));
-        let up = -(c0.rotation.transpose() * glam::DVec3::Y);
-        let eye = centre + glam::DQuat::from_axis_angle(up, spread.to_radians()) * (c0.centre() - centre);
-        let mut c1 = crate::camera::Camera::look_at(eye, centre, up, c0.width, c0.height, c0.fx);
-        c1.cx = c0.cx;
-        c1.cy = c0.cy;
-        scene.cameras[1] = c1;
-    }
-    let make_view = |name: &str, cam: crate::camera::Camera, salt: u64| -> Result<View> {
-        let mask = crate::raster::hard::render(mesh, &scene.pose, &cam);
-        let mask = roughen(&mask, scenes.noise_px, scenes.correlation_px, seed * 64 + salt);
-        View::new(name, cam, mask, None, None, &Default::default())
-    };
-    let views: Vec<View> = scene
-        .cameras
-        .iter()
-        .enumerate()
-        .map(|(i, c)| make_view(&format!("view{i}"), *c, i as u64))
-        .collect::<Result<_>>()?;
-    let mut est = Estimator::new(mesh.clone(), views.clone(), None, FitSettings::default())?;
-    est.run(1_000_000)?;
-    if est.judgement().map(|j| j.verdict) == Some(Verdict::Failed) {
+    let Some(setup) = NextViewSetup::new(mesh, seed, scenes, candidates, spread_deg)? else {
         return Ok(None);
-    }
-    let fitted = est.pose();
-    // A 2-view fit that did not find the object (ADD above the usual 10 % of the
-    // diameter) has no uncertainty worth planning with: not counted.
-    if metrics::pose_errors(mesh, &fitted, &scene.pose).add_rel > 0.1 {
-        return Ok(None);
-    }
-    let model = crate::raster::silhouette::RenderMesh::new(mesh.clone());
-    let cams = sphere_candidates(&model, &views, &fitted, candidates)?;
-    let ranked = est.suggest_views(Some(&cams))?;
-    let usable: Vec<usize> = ranked
-        .iter()
-        .filter(|r| r.predicted_add_rms.is_finite())
-        .map(|r| r.index)
-        .collect();
-    let Some((&top, rest)) = usable.split_first() else {
+    };
+    let Some((&top, rest)) = setup.ranked.split_first() else {
         return Err(Error::Settings(format!("scene {seed}: no candidate sees the object")));
     };
     let mut rng = rand::rngs::SmallRng::seed_from_u64(seed ^ 0x6e62_7620);
     let picks: Vec<usize> = rest.choose_multiple(&mut rng, randoms).copied().collect();
-    let refit = |i: usize| -> Result<Option<f64>> {
-        let mut v = views.clone();
-        // The candidate may not see the truth whole (it was placed around the fit).
-        let Ok(extra) = make_view("next", cams[i], 32 + i as u64) else {
-            return Ok(None);
-        };
-        v.push(extra);
-        let mut e = Estimator::new(mesh.clone(), v, Some(fitted), FitSettings::default())?;
-        e.run(1_000_000)?;
-        Ok(Some(metrics::add(mesh, &e.pose(), &scene.pose)))
-    };
-    let Some(add_top) = refit(top)? else {
+    let Some(add_top) = setup.refit(top, 0)? else {
         return Ok(None);
     };
     let add_random = picks
         .iter()
-        .filter_map(|&i| refit(i).transpose())
+        .filter_map(|&i| setup.refit(i, 0).transpose())
         .collect::<Result<Vec<f64>>>()?;
     Ok(Some(NextViewCase {
         seed,
-        add_before: metrics::add(mesh, &fitted, &scene.pose),
+        add_before: setup.add_before(),
         add_top,
         add_random,
     }))
+}
+
+/// The 2-view fit of the next-best-view check (see [`next_view_case`]) and its ranked
+/// candidates, ready to be refitted with a third view from any of them.
+#[derive(Debug, Clone)]
+pub struct NextViewSetup {
+    mesh: Mesh,
+    seed: u64,
+    scenes: CoverageScenes,
+    truth: crate::pose::Pose,
+    views: Vec<View>,
+    /// The 2-view fit's pose.
+    pub fitted: crate::pose::Pose,
+    /// The candidate cameras, in the sphere's order.
+    pub cameras: Vec<crate::camera::Camera>,
+    /// The indices of the candidates that see the object whole, best first.
+    pub ranked: Vec<usize>,
+}
+
+impl NextViewSetup {
+    /// Makes the scene of `seed` and fits its two views (see [`next_view_case`]);
+    /// `None` when that fit fails or is more than 10 % of the diameter off.
+    ///
+    /// Errors: the scene cannot be made or the fit errs.
+    pub fn new(
+        mesh: &Mesh,
+        seed: u64,
+        scenes: &CoverageScenes,
+        candidates: usize,
+        spread_deg: Option<f64>,
+    ) -> Result<Option<NextViewSetup>> {
+        use crate::uncertainty::sphere_candidates;
+        let settings = SynthSettings {
+            views: 2,
+            width: scenes.width,
+            height: scenes.height,
+            seed,
+            ..Default::default()
+        };
+        let mut scene = synthesize(mesh, &settings, None)?;
+        if let Some(spread) = spread_deg {
+            // Two stops of an arm on one side of the object: view 1 is view 0 turned by
+            // `spread` about view 0's image-up through the object's centre.
+            let c0 = scene.cameras[0];
+            let centre = mesh
+                .bounds()
+                .map_or(scene.pose.translation, |b| scene.pose.apply(b.centre()));
+            let up = -(c0.rotation.transpose() * glam::DVec3::Y);
+            let eye = centre + glam::DQuat::from_axis_angle(up, spread.to_radians()) * (c0.centre() - centre);
+            let mut c1 = crate::camera::Camera::look_at(eye, centre, up, c0.width, c0.height, c0.fx);
+            c1.cx = c0.cx;
+            c1.cy = c0.cy;
+            scene.cameras[1] = c1;
+        }
+        let mut setup = NextViewSetup {
+            mesh: mesh.clone(),
+            seed,
+            scenes: *scenes,
+            truth: scene.pose,
+            views: Vec::new(),
+            fitted: scene.pose,
+            cameras: Vec::new(),
+            ranked: Vec::new(),
+        };
+        setup.views = scene
+            .cameras
+            .iter()
+            .enumerate()
+            .map(|(i, c)| setup.view(&format!("view{i}"), *c, i as u64))
+            .collect::<Result<_>>()?;
+        let mut est = Estimator::new(mesh.clone(), setup.views.clone(), None, FitSettings::default())?;
+        est.run(1_000_000)?;
+        if est.judgement().map(|j| j.verdict) == Some(Verdict::Failed) {
+            return Ok(None);
+        }
+        setup.fitted = est.pose();
+        // A 2-view fit that did not find the object (ADD above the usual 10 % of the
+        // diameter) has no uncertainty worth planning with: not counted.
+        if metrics::pose_errors(mesh, &setup.fitted, &setup.truth).add_rel > 0.1 {
+            return Ok(None);
+        }
+        let model = crate::raster::silhouette::RenderMesh::new(mesh.clone());
+        setup.cameras = sphere_candidates(&model, &setup.views, &setup.fitted, candidates)?;
+        setup.ranked = est
+            .suggest_views(Some(&setup.cameras))?
+            .iter()
+            .filter(|r| r.predicted_add_rms.is_finite())
+            .map(|r| r.index)
+            .collect();
+        Ok(Some(setup))
+    }
+
+    /// The true ADD of the 2-view fit.
+    pub fn add_before(&self) -> f64 {
+        metrics::add(&self.mesh, &self.fitted, &self.truth)
+    }
+
+    /// The true ADD after refitting from the 2-view pose with a third view from
+    /// candidate `index`, its mask roughened with noise draw `draw` (draw 0 is the one
+    /// [`next_view_case`] uses); `None` when the candidate does not see the truth.
+    ///
+    /// Errors: the fit errs.
+    pub fn refit(&self, index: usize, draw: u64) -> Result<Option<f64>> {
+        let mut v = self.views.clone();
+        // The candidate may not see the truth whole (it was placed around the fit).
+        let Ok(extra) = self.view("next", self.cameras[index], 32 + index as u64 + 1000 * draw) else {
+            return Ok(None);
+        };
+        v.push(extra);
+        let mut e = Estimator::new(self.mesh.clone(), v, Some(self.fitted), FitSettings::default())?;
+        e.run(1_000_000)?;
+        Ok(Some(metrics::add(&self.mesh, &e.pose(), &self.truth)))
+    }
+
+    fn view(&self, name: &str, cam: crate::camera::Camera, salt: u64) -> Result<View> {
+        let mask = crate::raster::hard::render(&self.mesh, &self.truth, &cam);
+        let mask = roughen(
+            &mask,
+            self.scenes.noise_px,
+            self.scenes.correlation_px,
+            self.seed * 64 + salt,
+        );
+        View::new(name, cam, mask, None, None, &Default::default())
+    }
 }
 
 /// The errors of one fit of the camera-correction check.
