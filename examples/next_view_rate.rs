@@ -7,7 +7,8 @@
 //!
 //! Environment: `SPREAD` (degrees between the two stops; default the synthetic
 //! scene's cameras), `NOISE` (px, default 1), `NV` (candidates, default 64), `MESH` (a
-//! mesh file or a shape name of `synth --shape`, default the shared Duck).
+//! mesh file or a shape name of `synth --shape`, default the shared Duck), `W`, `H`
+//! (image size, default 160×120).
 
 use localisebot::app::coverage::{next_view_case, CoverageScenes};
 use localisebot::io;
@@ -30,8 +31,8 @@ fn main() {
         }
     };
     let scenes = CoverageScenes {
-        width: 160,
-        height: 120,
+        width: std::env::var("W").ok().and_then(|s| s.parse().ok()).unwrap_or(160),
+        height: std::env::var("H").ok().and_then(|s| s.parse().ok()).unwrap_or(120),
         noise_px: std::env::var("NOISE").ok().and_then(|s| s.parse().ok()).unwrap_or(1.0),
         correlation_px: 12.0,
     };
