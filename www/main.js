@@ -169,6 +169,8 @@ ui.download.addEventListener('click', () => send('result'));
 // Each view shows its object window by default; the toggle shows the whole image.
 ui.fullFrame.addEventListener('change', () => send('view', { full: ui.fullFrame.checked }));
 $('refine-cameras').addEventListener('change', (e) => send('cameras', { on: e.target.checked }));
+// The next view's candidates: the whole sphere, or its upper half (a camera over a table).
+$('suggest-above').addEventListener('change', (e) => send('viewpoints', { above: e.target.checked }));
 
 // The camera corrections of a fit done with "refine cameras" (or why there are none),
 // and whether they were applied (only when they explain enough of the loss).

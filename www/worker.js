@@ -42,6 +42,7 @@ let running = false;
 let runs = 0; // the current run loop's number (one loop at a time)
 let fullFrame = false; // overlays of the whole image instead of each view's object window
 let refineCameras = false; // correct each view's camera jointly with the pose
+let suggestAbove = false; // next views from the upper half of the sphere only
 
 const poolParam = new URL(self.location.href).searchParams.get('pool');
 
@@ -327,6 +328,10 @@ const handlers = {
     refineCameras = Boolean(msg.on);
     return exclusive(() => session && !session.done && session.setRefineCameras(refineCameras));
   },
+  viewpoints: (msg) => {
+    suggestAbove = Boolean(msg.above);
+    return exclusive(() => session && session.done && suggest3d());
+  },
   result: () => exclusive(() => session && post({ type: 'result', json: session.resultJson() })),
   view: (msg) => {
     fullFrame = Boolean(msg.full);
@@ -337,7 +342,8 @@ const handlers = {
 // ---- 3D view (www/view3d.js) --------------------------------------------------------
 // After a load: the mesh for display, the cameras and each view's picture. When the
 // fit is done: the result's covariance (null until the result has one) and, when the
-// wasm has Session.suggestViews, the 3 best next views. When it is no longer done
+// wasm has Session.suggestViews, the 3 best next views (from the upper half of the
+// sphere with "next view from above"). When it is no longer done
 // (Reset), both are cleared. A failure here is reported to the page's 3D view only.
 const PICTURE_PX = 512; // longest side of a view's picture on its image plane
 let finished3d = false;
@@ -368,11 +374,26 @@ function done3d(progress) {
     const result = session.result();
     msg.covariance = result.covariance ?? null;
     post({ type: 'cameras', corrections: result.camera_corrections ?? null, test: result.camera_test ?? null, error: result.camera_correction_error ?? null });
-    if (typeof session.suggestViews === 'function') msg.suggestions = session.suggestViews(3);
+    msg.suggestions = suggestions();
   } catch (e) {
     msg.error = e?.message ?? String(e);
   }
   post(msg);
+}
+
+// The 3 best next views from the chosen viewpoints (null when the wasm has none).
+function suggestions() {
+  if (typeof session.suggestViews !== 'function') return null;
+  return session.suggestViews(3, suggestAbove ? 'above' : 'sphere');
+}
+
+// The suggestions again, after the viewpoints changed on a finished fit.
+function suggest3d() {
+  try {
+    post({ type: 'view3d', suggestions: suggestions() });
+  } catch (e) {
+    post({ type: 'view3d', error: e?.message ?? String(e) });
+  }
 }
 
 onmessage = async ({ data }) => {

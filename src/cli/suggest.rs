@@ -1,7 +1,8 @@
-//! `localisebot suggest-view SCENE RESULT [--candidates CAMERAS.json] [--top K]`: the
-//! next photograph to take. Ranks candidate cameras (default: 64 viewpoints on a sphere
-//! around the object at the views' mean distance, looking at it, with view 0's
-//! intrinsics) by the predicted pose uncertainty after adding a photograph from there
+//! `localisebot suggest-view SCENE RESULT [--candidates CAMERAS.json | --viewpoints
+//! above] [--top K]`: the next photograph to take. Ranks candidate cameras (default: 64
+//! viewpoints on a sphere around the object at the views' mean distance, looking at it,
+//! with view 0's intrinsics; `--viewpoints above`: on the sphere's upper half, along the
+//! views' mean image-up) by the predicted pose uncertainty after adding a photograph from there
 //! (`localisebot::uncertainty::next_view`), prints the best K on standard output as a
 //! JSON list of camera objects in the scene file's form (best first, ready to add to
 //! the scene), and their predicted figures on standard error.
@@ -12,7 +13,7 @@ use clap::Args;
 use localisebot::loss::target::Window;
 use localisebot::optim::lm::Free;
 use localisebot::raster::silhouette::RenderMesh;
-use localisebot::uncertainty::{suggest_views, NoiseModel};
+use localisebot::uncertainty::{candidate_viewpoints, next_view::SPHERE, suggest_views, NoiseModel, Viewpoints};
 use localisebot::{Camera, CameraJson, FitSettings};
 use std::path::{Path, PathBuf};
 
@@ -28,6 +29,11 @@ pub struct SuggestArgs {
     /// objects with a "camera" key, or a scene file whose views' cameras are taken.
     #[arg(long)]
     pub candidates: Option<PathBuf>,
+    /// Where the default candidates lie: the whole sphere around the object (the
+    /// default), or its upper half (along the views' mean image-up: a camera over a
+    /// table). Not with `--candidates`.
+    #[arg(long, value_enum)]
+    pub viewpoints: Option<ViewpointsArg>,
     /// How many cameras to print (default 3).
     #[arg(long, default_value_t = 3)]
     pub top: usize,
@@ -37,14 +43,37 @@ pub struct SuggestArgs {
     pub scale: Option<ScaleArg>,
 }
 
+/// `--viewpoints`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewpointsArg {
+    /// The whole sphere.
+    Sphere,
+    /// Its upper half.
+    Above,
+}
+
 /// Runs `suggest-view`.
 pub fn run(a: &SuggestArgs) -> CliResult<()> {
     let scene = load_scene_file(&a.scene)?;
     let pose = load_pose(&a.result)?;
     let doubted = doubted_views(&a.result)?;
+    if a.candidates.is_some() && a.viewpoints.is_some() {
+        return Err(
+            "suggest-view: --viewpoints chooses the default candidates; it cannot be used with --candidates".into(),
+        );
+    }
+    let given = a.candidates.is_some();
     let candidates = match &a.candidates {
-        Some(p) => Some(load_cameras(p)?),
-        None => None,
+        Some(p) => load_cameras(p)?,
+        None => {
+            let shell = match a.viewpoints {
+                None | Some(ViewpointsArg::Sphere) => Viewpoints::Sphere,
+                Some(ViewpointsArg::Above) => Viewpoints::Above,
+            };
+            let model = RenderMesh::new(scene.mesh.clone());
+            candidate_viewpoints(&model, &scene.views, &pose, SPHERE, shell)
+                .map_err(|e| format!("{}: {e}", a.scene.display()))?
+        }
     };
     let settings = FitSettings::default();
     let windows: Vec<Window> = scene
@@ -75,7 +104,7 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
             Some(ScaleArg::Isotropic) => Free::IsotropicScale,
             Some(ScaleArg::Fixed) => Free::NoScale,
         },
-        candidates.as_deref(),
+        Some(&candidates),
         &NoiseModel::default(),
     )
     .map_err(|e| format!("{}: {e}", a.scene.display()))?;
@@ -91,7 +120,11 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
     eprintln!(
         "{} candidates ({}), {} see the whole object; expected RMS ADD now {:.4e}",
         ranked.len(),
-        if candidates.is_some() { "given" } else { "sphere" },
+        match (given, a.viewpoints) {
+            (true, _) => "given",
+            (false, None | Some(ViewpointsArg::Sphere)) => "sphere",
+            (false, Some(ViewpointsArg::Above)) => "upper half-sphere",
+        },
         usable.len(),
         ranked[0].current_add_rms
     );

@@ -24,7 +24,8 @@ use crate::pose::Pose;
 use crate::raster::hard::{self, BitMask};
 use crate::raster::silhouette::RenderMesh;
 use crate::uncertainty::{
-    fit_uncertainty, next_view, rank_views, sphere_candidates, std_dev, NoiseModel, RankedView, Uncertainty,
+    candidate_viewpoints, fit_uncertainty, next_view, rank_views, sphere_candidates, std_dev, NoiseModel, RankedView,
+    Uncertainty, Viewpoints,
 };
 use crate::verdict::{self, Judgement, Verdict};
 use crate::view::View;
@@ -826,6 +827,17 @@ impl Estimator {
             }
         };
         rank_views(&self.model, &f.pose, u, candidates, &NoiseModel::default())
+    }
+
+    /// `count` candidate viewpoints over `shell` around the finished fit's pose
+    /// ([`crate::uncertainty::candidate_viewpoints`]), for [`Estimator::suggest_views`].
+    ///
+    /// Errors: the fit is not done.
+    pub fn viewpoints(&self, count: usize, shell: Viewpoints) -> Result<Vec<crate::camera::Camera>> {
+        let Some(f) = &self.done else {
+            return Err(Error::Settings("next view: the fit is not done".into()));
+        };
+        candidate_viewpoints(&self.model, &self.views, &f.pose, count, shell)
     }
 
     /// The parameters the fit frees (its scale mode).

@@ -59,7 +59,7 @@ use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 
 pub use fit::fit_uncertainty;
-pub use next_view::{rank_views, sphere_candidates, suggest_views, RankedView};
+pub use next_view::{candidate_viewpoints, rank_views, sphere_candidates, suggest_views, RankedView, Viewpoints};
 pub use outline::{outline_information, view_information, ViewInformation};
 
 /// The pose dimension, `[ω, t, log s]`.

@@ -40,29 +40,72 @@ pub struct RankedView {
     pub outline_px: f64,
 }
 
+/// Where the default candidate viewpoints lie.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Viewpoints {
+    /// The whole sphere around the object, its poles along view 0's image-up.
+    #[default]
+    Sphere,
+    /// The half of the sphere above the object: on the side the views' mean image-up
+    /// points to (a camera on an arm over a table cannot look from under it).
+    Above,
+}
+
 /// `count` viewpoints evenly spread on the sphere (a Fibonacci lattice) around the
 /// object at `pose`, at the views' mean distance from it, looking at it, with the
 /// intrinsics of view 0 and image-up along view 0's.
 ///
 /// Errors: no views.
 pub fn sphere_candidates(model: &RenderMesh, views: &[View], pose: &Pose, count: usize) -> Result<Vec<Camera>> {
+    candidate_viewpoints(model, views, pose, count, Viewpoints::Sphere)
+}
+
+/// `count` viewpoints evenly spread over `shell` (a Fibonacci lattice; see
+/// [`Viewpoints`]) around the object at `pose`, at the views' mean distance from it,
+/// looking at it, with the intrinsics of view 0. Image-up is the lattice's axis: view
+/// 0's image-up for the sphere, the views' mean image-up for the upper half (view 0's
+/// when they cancel out).
+///
+/// Errors: no views.
+pub fn candidate_viewpoints(
+    model: &RenderMesh,
+    views: &[View],
+    pose: &Pose,
+    count: usize,
+    shell: Viewpoints,
+) -> Result<Vec<Camera>> {
     let first = views
         .first()
         .ok_or_else(|| Error::Settings("next view: the scene has no views".into()))?
         .camera();
     let centre = model.mesh.bounds().map_or(pose.translation, |b| pose.apply(b.centre()));
     let distance = views.iter().map(|v| v.camera().centre().distance(centre)).sum::<f64>() / views.len() as f64;
-    // View 0's image-up in the world: −y of its camera axes.
-    let up = -(first.rotation.transpose() * DVec3::Y);
+    // A view's image-up in the world: −y of its camera axes.
+    let image_up = |c: &Camera| -(c.rotation.transpose() * DVec3::Y);
+    let up = match shell {
+        Viewpoints::Sphere => image_up(first),
+        Viewpoints::Above => views
+            .iter()
+            .map(|v| image_up(v.camera()))
+            .sum::<DVec3>()
+            .try_normalize()
+            .filter(|_| views.len() > 1)
+            .unwrap_or_else(|| image_up(first)),
+    };
+    // The lattice's heights along `up`: the whole of [−1, 1], or (0, 1].
+    let (top, span) = match shell {
+        Viewpoints::Sphere => (1.0, 2.0),
+        Viewpoints::Above => (1.0, 1.0),
+    };
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     let n = count.max(1);
+    let (e1, e2) = up.any_orthonormal_pair();
     Ok((0..n)
         .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let z = top - span * (i as f64 + 0.5) / n as f64;
             let r = (1.0 - z * z).max(0.0).sqrt();
             let a = golden * i as f64;
-            // A lattice about view 0's up, so that its poles are above and below.
-            let (e1, e2) = up.any_orthonormal_pair();
+            // A lattice about `up`, so that its pole is above the object.
             let dir = up * z + (e1 * a.cos() + e2 * a.sin()) * r;
             let eye = centre + dir * distance;
             let mut cam = Camera::look_at(eye, centre, up, first.width, first.height, first.fx);
@@ -202,6 +245,58 @@ mod tests {
                 assert!(da.angle_between(db) > spacing / 3.0);
             }
         }
+    }
+
+    #[test]
+    fn viewpoints_above_cover_the_upper_half_about_the_views_mean_up() {
+        let mesh = crate::app::synth::blob_mesh(10, 14);
+        let s = synthesize(
+            &mesh,
+            &SynthSettings {
+                views: 3,
+                ..Default::default()
+            },
+            None,
+        )
+        .unwrap();
+        let model = RenderMesh::new(mesh);
+        let views = s.views();
+        let n = 40;
+        let cams = candidate_viewpoints(&model, &views, &s.pose, n, Viewpoints::Above).unwrap();
+        assert_eq!(cams.len(), n);
+        let c = s.pose.apply(model.mesh.bounds().unwrap().centre());
+        let d0 = views.iter().map(|v| v.camera().centre().distance(c)).sum::<f64>() / 3.0;
+        let up = views
+            .iter()
+            .map(|v| -(v.camera().rotation.transpose() * DVec3::Y))
+            .sum::<DVec3>()
+            .normalize();
+        let heights: Vec<f64> = cams.iter().map(|k| (k.centre() - c).normalize().dot(up)).collect();
+        for (k, h) in cams.iter().zip(&heights) {
+            assert!(*h > 0.0, "a candidate below the object: height {h}");
+            assert!((k.centre().distance(c) - d0).abs() < 1e-9 * d0);
+            let p = k.project(k.to_camera(c));
+            assert!((p - glam::DVec2::new(k.cx, k.cy)).length() < 1e-6, "{p:?}");
+            // Image-up is the lattice's axis: the object's "up" is up in every picture.
+            let k_up = -(k.rotation.transpose() * DVec3::Y);
+            assert!(k_up.dot(up) > 0.0);
+        }
+        // The whole upper half: from near the pole to near the horizon, evenly.
+        let (lo, hi) = heights.iter().fold((1.0f64, 0.0f64), |(l, h), &z| (l.min(z), h.max(z)));
+        assert!(lo < 0.05 && hi > 0.95, "heights {lo}..{hi}");
+        let spacing = (2.0 * std::f64::consts::PI / n as f64).sqrt();
+        for (i, a) in cams.iter().enumerate() {
+            for b in &cams[i + 1..] {
+                let (da, db) = ((a.centre() - c).normalize(), (b.centre() - c).normalize());
+                assert!(da.angle_between(db) > spacing / 3.0);
+            }
+        }
+        // The sphere is the old lattice, both halves.
+        let sphere = candidate_viewpoints(&model, &views, &s.pose, n, Viewpoints::Sphere).unwrap();
+        assert_eq!(sphere, sphere_candidates(&model, &views, &s.pose, n).unwrap());
+        let up0 = -(views[0].camera().rotation.transpose() * DVec3::Y);
+        let below = sphere.iter().filter(|k| (k.centre() - c).dot(up0) < 0.0).count();
+        assert_eq!(below, n / 2);
     }
 
     #[test]

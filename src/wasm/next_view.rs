@@ -1,12 +1,14 @@
-//! `Session.suggestViews(top)`: once a fit is done, the cameras from which a further
-//! photograph is predicted to shrink the pose uncertainty most (64 viewpoints on a
-//! sphere around the object at the views' mean distance, with view 0's intrinsics;
+//! `Session.suggestViews(top, viewpoints?)`: once a fit is done, the cameras from which a
+//! further photograph is predicted to shrink the pose uncertainty most (64 viewpoints on
+//! a sphere around the object at the views' mean distance, or with `"above"` on its
+//! upper half, with view 0's intrinsics;
 //! `crate::uncertainty::next_view`), best first, each in the scene file's camera form
 //! with its predicted figures — the same as `localisebot suggest-view`.
 
 use super::session::Session;
 use super::to_js;
 use crate::camera::CameraJson;
+use crate::uncertainty::{next_view::SPHERE, Viewpoints};
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
@@ -40,11 +42,23 @@ export interface Suggestion {
 #[wasm_bindgen]
 impl Session {
     /// The best `top` cameras for the next photograph, once the fit is done (see the
-    /// module doc). Throws an `Error` before the fit is done or when its uncertainty
-    /// could not be measured.
+    /// module doc), from `viewpoints`: `"sphere"` (the default, also when omitted or
+    /// null) or `"above"` (the upper half of the sphere, along the views' mean
+    /// image-up). Throws an `Error` before the fit is done, when its uncertainty could
+    /// not be measured, or for another `viewpoints`.
     #[wasm_bindgen(js_name = suggestViews, unchecked_return_type = "Suggestion[]")]
-    pub fn suggest_views(&self, top: u32) -> Result<JsValue, JsError> {
-        let ranked = self.estimator().suggest_views(None)?;
+    pub fn suggest_views(&self, top: u32, viewpoints: Option<String>) -> Result<JsValue, JsError> {
+        let shell = match viewpoints.as_deref() {
+            None | Some("sphere") => Viewpoints::Sphere,
+            Some("above") => Viewpoints::Above,
+            Some(other) => {
+                return Err(JsError::new(&format!(
+                    "suggestViews: viewpoints must be \"sphere\" or \"above\", got {other:?}"
+                )))
+            }
+        };
+        let cams = self.estimator().viewpoints(SPHERE, shell)?;
+        let ranked = self.estimator().suggest_views(Some(&cams))?;
         let out: Vec<Suggestion> = ranked
             .iter()
             .filter(|r| r.predicted_add_rms.is_finite())

@@ -352,6 +352,37 @@ test('uncertainty: ghosts drawn from a covariance (the result\'s, or one given),
   assert.deepEqual(page.problems, []);
 });
 
+test('next view from above: the switch re-ranks the finished fit\'s next views on the upper half of the sphere, and back', async () => {
+  assert.ok(glueHasSuggest, 'this wasm has Session.suggestViews');
+  const { page } = await fittedPage();
+  const suggestion = () => call(page, (v) => v.suggestion);
+  // The views' mean image-up (−y of each camera, in the world) and the object's centre
+  // (its model box's centre at the drawn pose): the lattice's axis and centre.
+  const up = [0, 1, 2].map((j) => -toyScene.views.reduce((s, v) => s + v.camera.world_to_camera[1][j], 0));
+  const centre = await call(page, (v) => {
+    const g = v.object.geometry;
+    g.computeBoundingBox();
+    return g.boundingBox.getCenter(new v.THREE.Vector3()).applyMatrix4(v.object.matrixWorld).toArray();
+  });
+  const heights = (list) => list.map(({ world_to_camera: m }) => [0, 1, 2]
+    .map((i) => -(m[0][i] * m[0][3] + m[1][i] * m[1][3] + m[2][i] * m[2][3]))
+    .reduce((s, x, i) => s + (x - centre[i]) * up[i], 0));
+  const sphere = await suggestion();
+  assert.equal(sphere?.length, 3, 'the worker posted 3 suggestions');
+  const changed = (before) => page.waitForFunction((b) => JSON.stringify(document.getElementById('view3d').view3d.suggestion) !== b,
+    JSON.stringify(before), { timeout: 30_000 });
+  await byId(page, 'suggest-above').check();
+  await changed(sphere);
+  const above = await suggestion();
+  assert.equal(above.length, 3);
+  assert.ok(heights(above).every((h) => h > 0), `heights along the views' up: ${heights(above)}`);
+  assert.ok((await info(page)).suggestion, 'the best is drawn');
+  await byId(page, 'suggest-above').uncheck();
+  await changed(above);
+  assert.deepEqual(await suggestion(), sphere, 'the sphere\'s suggestions again');
+  assert.deepEqual(page.problems, []);
+});
+
 test('suggestion: the next view is a highlighted frustum with its camera JSON; Reset clears it and the ghosts', async () => {
   const { page, result } = await fittedPage();
   const s0 = await info(page);

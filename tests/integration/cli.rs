@@ -694,4 +694,43 @@ fn suggest_view_prints_cameras_that_look_at_the_object() {
     // A missing candidates file is named.
     let missing = d.join("nope.json");
     assert_error(&suggest(&["--candidates", missing.to_str().unwrap()]), &["nope.json"]);
+    // From above: every suggested camera is on the side the views' image-up points to,
+    // seen from the object's centre (the lattice's centre: the posed mesh's box centre).
+    let duck = data("gltf/Duck/glTF-Binary/Duck.glb");
+    let mesh = localisebot::io::load_mesh(&duck.to_string_lossy(), &std::fs::read(&duck).unwrap(), &|_| None).unwrap();
+    let pose: localisebot::PoseJson = serde_json::from_value(scene["ground_truth_pose"].clone()).unwrap();
+    let c = pose.to_pose().unwrap().apply(mesh.bounds().unwrap().centre());
+    let t = [c.x, c.y, c.z];
+    let rows =
+        |c: &serde_json::Value| -> Vec<Vec<f64>> { serde_json::from_value(c["world_to_camera"].clone()).unwrap() };
+    let centre = |m: &[Vec<f64>]| -> Vec<f64> {
+        (0..3)
+            .map(|j| -(0..3).map(|i| m[i][j] * m[i][3]).sum::<f64>())
+            .collect()
+    };
+    let views = scene["views"].as_array().unwrap();
+    let up: Vec<f64> = (0..3)
+        .map(|j| views.iter().map(|v| -rows(&v["camera"])[1][j]).sum::<f64>())
+        .collect();
+    let above = suggest(&["--top", "5", "--viewpoints", "above"]);
+    assert!(above.status.success(), "{}", stderr(&above));
+    assert!(stderr(&above).contains("upper half-sphere"), "{}", stderr(&above));
+    let cams: Vec<serde_json::Value> = serde_json::from_slice(&above.stdout).unwrap();
+    assert_eq!(cams.len(), 5);
+    for c in &cams {
+        let e = centre(&rows(c));
+        let h: f64 = (0..3).map(|j| (e[j] - t[j]) * up[j]).sum();
+        assert!(h > 0.0, "below the object: {c}");
+    }
+    // The sphere's best five include a camera below for this scene, or the check above
+    // would not tell the two apart.
+    let all: Vec<serde_json::Value> = serde_json::from_slice(&suggest(&["--top", "64"]).stdout).unwrap();
+    assert!(all.iter().any(|c| {
+        let e = centre(&rows(c));
+        (0..3).map(|j| (e[j] - t[j]) * up[j]).sum::<f64>() < 0.0
+    }));
+    assert_error(
+        &suggest(&["--viewpoints", "above", "--candidates", missing.to_str().unwrap()]),
+        &["--viewpoints", "--candidates"],
+    );
 }

@@ -469,6 +469,34 @@ fn a_fit_converges_to_the_native_result() {
         assert!((w - n).abs() <= 0.02 && w >= 0.95, "view IoU {w} in wasm, {n} natively");
     }
     assert!(wasm["errors"]["rotation_deg"].as_f64().unwrap() < 2.0);
+
+    // The next photograph (the page's `Session.suggestViews`): from the sphere, and from
+    // above — every camera on the side the views' mean image-up points to; another
+    // choice is an Error that names it.
+    let est = session.estimator();
+    let up: glam::DVec3 = est
+        .views()
+        .iter()
+        .map(|v| -(v.camera().rotation.transpose() * glam::DVec3::Y))
+        .sum();
+    let centre = est.pose().apply(est.mesh().bounds().unwrap().centre());
+    let heights = |list: JsValue| -> Vec<f64> {
+        let list: serde_json::Value = serde_wasm_bindgen::from_value(list).unwrap();
+        list.as_array()
+            .unwrap()
+            .iter()
+            .map(|s| {
+                let json: CameraJson = serde_json::from_value(s["camera"].clone()).unwrap();
+                (json.to_camera("suggestion").unwrap().centre() - centre).dot(up)
+            })
+            .collect()
+    };
+    let above = heights(session.suggest_views(5, Some("above".into())).unwrap());
+    assert_eq!(above.len(), 5);
+    assert!(above.iter().all(|&h| h > 0.0), "{above:?}");
+    assert_eq!(heights(session.suggest_views(2, None).unwrap()).len(), 2);
+    let msg = js_message(session.suggest_views(1, Some("below".into())).err().unwrap());
+    assert!(msg.contains("below") && msg.contains("above"), "{msg}");
 }
 
 /// The pool's protocol as the page's coordinator runs it (`www/worker.js`), in one
