@@ -12,6 +12,7 @@
 
 use localisebot::app::coverage::{CoverageScenes, NextViewSetup};
 use localisebot::io;
+use localisebot::uncertainty::Viewpoints;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 
@@ -70,7 +71,7 @@ fn main() {
     let mut rng = rand::rngs::SmallRng::seed_from_u64(7);
     let (mut suggested, mut oracle, mut means, mut within, mut between) = (vec![], vec![], vec![], vec![], vec![]);
     for seed in first..=last {
-        let setup = match NextViewSetup::new(&mesh, seed, &scenes, 64, Some(45.0)) {
+        let setup = match NextViewSetup::new(&mesh, seed, &scenes, 64, Viewpoints::Sphere, Some(45.0)) {
             Ok(Some(s)) => s,
             Ok(None) => continue,
             Err(e) => panic!("seed {seed}: {e}"),

@@ -8,10 +8,11 @@
 //! Environment: `SPREAD` (degrees between the two stops; default the synthetic
 //! scene's cameras), `NOISE` (px, default 1), `NV` (candidates, default 64), `MESH` (a
 //! mesh file or a shape name of `synth --shape`, default the shared Duck), `W`, `H`
-//! (image size, default 160×120).
+//! (image size, default 160×120), `ABOVE` (set: candidates on the upper half-sphere).
 
 use localisebot::app::coverage::{next_view_case, CoverageScenes};
 use localisebot::io;
+use localisebot::uncertainty::Viewpoints;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -43,6 +44,11 @@ fn main() {
             seed,
             &scenes,
             std::env::var("NV").ok().and_then(|s| s.parse().ok()).unwrap_or(64),
+            if std::env::var("ABOVE").is_ok() {
+                Viewpoints::Above
+            } else {
+                Viewpoints::Sphere
+            },
             5,
             std::env::var("SPREAD").ok().and_then(|s| s.parse().ok()),
         ) {

@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::estimator::{Estimator, FitSettings};
 use crate::mesh::Mesh;
 use crate::metrics;
-use crate::uncertainty::{mahalanobis_sq, pose_error, Mat9, CHI2_9_95};
+use crate::uncertainty::{mahalanobis_sq, pose_error, Mat9, Viewpoints, CHI2_9_95};
 use crate::verdict::Verdict;
 use crate::view::View;
 
@@ -147,7 +147,7 @@ impl NextViewCase {
 
 /// The next-best-view check on the scene of `seed`: a 2-view fit (masks as
 /// `scenes`; the synthetic scene's two cameras, or with `spread_deg` two cameras that
-/// far apart about the object), `candidates` sphere viewpoints ranked, then the fit refined from its pose
+/// far apart about the object), `candidates` viewpoints over `shell` ranked, then the fit refined from its pose
 /// with a third view from the top candidate, and again with each of `randoms` other
 /// candidates drawn at random (masks rendered at the truth, roughened alike). `None`
 /// when the 2-view fit fails or is more than 10 % of the diameter off.
@@ -158,12 +158,13 @@ pub fn next_view_case(
     seed: u64,
     scenes: &CoverageScenes,
     candidates: usize,
+    shell: Viewpoints,
     randoms: usize,
     spread_deg: Option<f64>,
 ) -> Result<Option<NextViewCase>> {
     use rand::seq::SliceRandom;
     use rand::SeedableRng;
-    let Some(setup) = NextViewSetup::new(mesh, seed, scenes, candidates, spread_deg)? else {
+    let Some(setup) = NextViewSetup::new(mesh, seed, scenes, candidates, shell, spread_deg)? else {
         return Ok(None);
     };
     let Some((&top, rest)) = setup.ranked.split_first() else {
@@ -213,9 +214,10 @@ impl NextViewSetup {
         seed: u64,
         scenes: &CoverageScenes,
         candidates: usize,
+        shell: Viewpoints,
         spread_deg: Option<f64>,
     ) -> Result<Option<NextViewSetup>> {
-        use crate::uncertainty::sphere_candidates;
+        use crate::uncertainty::candidate_viewpoints;
         let settings = SynthSettings {
             views: 2,
             width: scenes.width,
@@ -266,7 +268,7 @@ impl NextViewSetup {
             return Ok(None);
         }
         let model = crate::raster::silhouette::RenderMesh::new(mesh.clone());
-        setup.cameras = sphere_candidates(&model, &setup.views, &setup.fitted, candidates)?;
+        setup.cameras = candidate_viewpoints(&model, &setup.views, &setup.fitted, candidates, shell)?;
         setup.ranked = est
             .suggest_views(Some(&setup.cameras))?
             .iter()

@@ -6,6 +6,7 @@
 use crate::data;
 use localisebot::app::coverage::{coverage, coverage_case, next_view_case, CoverageCase, CoverageScenes};
 use localisebot::io;
+use localisebot::uncertainty::Viewpoints;
 
 fn cases(first: u64, last: u64, noise_px: f64) -> Vec<CoverageCase> {
     let path = data("gltf/Duck/glTF-Binary/Duck.glb");
@@ -93,7 +94,7 @@ fn the_suggested_view_beats_the_median_random_one_more_often_than_not() {
         correlation_px: 12.0,
     };
     let cases: Vec<_> = (500..=539)
-        .filter_map(|seed| next_view_case(&mesh, seed, &scenes, 64, 5, Some(45.0)).unwrap())
+        .filter_map(|seed| next_view_case(&mesh, seed, &scenes, 64, Viewpoints::Sphere, 5, Some(45.0)).unwrap())
         .collect();
     let wins = cases.iter().filter(|c| c.top_wins()).count();
     for c in &cases {
