@@ -84,13 +84,15 @@ pub fn candidate_viewpoints(
     let image_up = |c: &Camera| -(c.rotation.transpose() * DVec3::Y);
     let up = match shell {
         Viewpoints::Sphere => image_up(first),
-        Viewpoints::Above => views
-            .iter()
-            .map(|v| image_up(v.camera()))
-            .sum::<DVec3>()
-            .try_normalize()
-            .filter(|_| views.len() > 1)
-            .unwrap_or_else(|| image_up(first)),
+        Viewpoints::Above => {
+            let sum = views.iter().map(|v| image_up(v.camera())).sum::<DVec3>();
+            // Views whose ups (nearly) cancel out say nothing of "up": view 0's then.
+            if sum.length() > 1e-3 * views.len() as f64 {
+                sum.normalize()
+            } else {
+                image_up(first)
+            }
+        }
     };
     // The lattice's heights along `up`: the whole of [−1, 1], or (0, 1].
     let (top, span) = match shell {
@@ -297,6 +299,19 @@ mod tests {
         let up0 = -(views[0].camera().rotation.transpose() * DVec3::Y);
         let below = sphere.iter().filter(|k| (k.centre() - c).dot(up0) < 0.0).count();
         assert_eq!(below, n / 2);
+        // Views whose ups cancel out (view 0 and itself turned upside down about its
+        // axis): the upper half is view 0's.
+        let mut flipped = *views[0].camera();
+        flipped.rotation = glam::DMat3::from_diagonal(DVec3::new(-1.0, -1.0, 1.0)) * flipped.rotation;
+        flipped.translation = glam::DMat3::from_diagonal(DVec3::new(-1.0, -1.0, 1.0)) * flipped.translation;
+        assert!(flipped.centre().distance(views[0].camera().centre()) < 1e-9);
+        let mask = views[0].mask().clone();
+        let pair = [
+            views[0].clone(),
+            View::new("upside down", flipped, mask, None, None, &Default::default()).unwrap(),
+        ];
+        let cams = candidate_viewpoints(&model, &pair, &s.pose, n, Viewpoints::Above).unwrap();
+        assert!(cams.iter().all(|k| (k.centre() - c).dot(up0) > 0.0));
     }
 
     #[test]
