@@ -63,6 +63,7 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
         );
     }
     let given = a.candidates.is_some();
+    let model = RenderMesh::new(scene.mesh.clone());
     let candidates = match &a.candidates {
         Some(p) => load_cameras(p)?,
         None => {
@@ -70,7 +71,6 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
                 None | Some(ViewpointsArg::Sphere) => Viewpoints::Sphere,
                 Some(ViewpointsArg::Above) => Viewpoints::Above,
             };
-            let model = RenderMesh::new(scene.mesh.clone());
             candidate_viewpoints(&model, &scene.views, &pose, SPHERE, shell)
                 .map_err(|e| format!("{}: {e}", a.scene.display()))?
         }
@@ -92,7 +92,6 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
             }
         })
         .collect();
-    let model = RenderMesh::new(scene.mesh.clone());
     let ranked = suggest_views(
         &model,
         &scene.views,
