@@ -12,22 +12,13 @@
 
 use localisebot::app::coverage::{CoverageScenes, NextViewSetup};
 use localisebot::io;
+use localisebot::metrics::median;
 use localisebot::uncertainty::Viewpoints;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 
 /// Trials of the random draw of 5 candidates per scene.
 const TRIALS: usize = 400;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
 
 /// The chance that `pick(top)` beats the median of `pick` over 5 random others.
 fn rate(
@@ -41,7 +32,7 @@ fn rate(
     for _ in 0..TRIALS {
         let a = pick(rng, top);
         let five: Vec<usize> = others.choose_multiple(rng, 5).copied().collect();
-        let m = median(five.iter().map(|&i| pick(rng, i)).collect());
+        let m = median(&five.iter().map(|&i| pick(rng, i)).collect::<Vec<_>>());
         wins += usize::from(a < m);
     }
     wins as f64 / TRIALS as f64

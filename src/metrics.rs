@@ -252,3 +252,15 @@ pub fn hausdorff_px(a: &Mask, b: &Mask) -> f64 {
 pub fn mean_contour_distance_px(a: &Mask, b: &Mask) -> f64 {
     contour_distance(a, b).mean
 }
+
+/// The median of `v` (the mean of the two middle values for an even count), NaN for
+/// an empty slice.
+pub fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    match s.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => s[n / 2],
+        n => 0.5 * (s[n / 2 - 1] + s[n / 2]),
+    }
+}

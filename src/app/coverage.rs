@@ -130,13 +130,7 @@ pub struct NextViewCase {
 impl NextViewCase {
     /// The median of the random candidates' ADDs.
     pub fn median_random(&self) -> f64 {
-        let mut v = self.add_random.clone();
-        v.sort_by(f64::total_cmp);
-        match v.len() {
-            0 => f64::NAN,
-            n if n % 2 == 1 => v[n / 2],
-            n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-        }
+        metrics::median(&self.add_random)
     }
 
     /// Whether the top candidate beat the median random one.

@@ -94,17 +94,8 @@ pub fn accuracy_measure(o: &SceneOutcome) -> f64 {
         .map_or(f64::INFINITY, |e| if o.symmetric { e.add_s_rel } else { e.add_rel })
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
+fn median(v: Vec<f64>) -> f64 {
+    crate::metrics::median(&v)
 }
 
 /// P/R/F1 at `threshold` over all views of all scenes.

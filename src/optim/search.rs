@@ -170,15 +170,9 @@ pub fn score_candidate(
 /// The median of a non-empty slice (0 for an empty one).
 fn median(v: &[f64]) -> f64 {
     if v.is_empty() {
-        return 0.0;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
+        0.0
     } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
+        crate::metrics::median(v)
     }
 }
 

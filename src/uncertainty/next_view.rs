@@ -216,23 +216,23 @@ mod tests {
     use crate::optim::lm::Free;
     use crate::uncertainty::fit_uncertainty;
 
+    /// A blob seen by `views` synthetic cameras: its render mesh, views and true pose.
+    fn blob_scene(views: usize) -> (RenderMesh, Vec<View>, Pose) {
+        let mesh = crate::app::synth::blob_mesh(10, 14);
+        let settings = SynthSettings {
+            views,
+            ..Default::default()
+        };
+        let s = synthesize(&mesh, &settings, None).unwrap();
+        (RenderMesh::new(mesh), s.views(), s.pose)
+    }
+
     #[test]
     fn sphere_candidates_look_at_the_object_from_the_views_distance() {
-        let mesh = crate::app::synth::blob_mesh(10, 14);
-        let s = synthesize(
-            &mesh,
-            &SynthSettings {
-                views: 2,
-                ..Default::default()
-            },
-            None,
-        )
-        .unwrap();
-        let model = RenderMesh::new(mesh);
-        let views = s.views();
-        let cams = sphere_candidates(&model, &views, &s.pose, 32).unwrap();
+        let (model, views, pose) = blob_scene(2);
+        let cams = sphere_candidates(&model, &views, &pose, 32).unwrap();
         assert_eq!(cams.len(), 32);
-        let c = s.pose.apply(model.mesh.bounds().unwrap().centre());
+        let c = pose.apply(model.mesh.bounds().unwrap().centre());
         let d0 = views.iter().map(|v| v.camera().centre().distance(c)).sum::<f64>() / 2.0;
         for cam in &cams {
             assert!((cam.centre().distance(c) - d0).abs() < 1e-9 * d0);
@@ -251,22 +251,11 @@ mod tests {
 
     #[test]
     fn viewpoints_above_cover_the_upper_half_about_the_views_mean_up() {
-        let mesh = crate::app::synth::blob_mesh(10, 14);
-        let s = synthesize(
-            &mesh,
-            &SynthSettings {
-                views: 3,
-                ..Default::default()
-            },
-            None,
-        )
-        .unwrap();
-        let model = RenderMesh::new(mesh);
-        let views = s.views();
+        let (model, views, pose) = blob_scene(3);
         let n = 40;
-        let cams = candidate_viewpoints(&model, &views, &s.pose, n, Viewpoints::Above).unwrap();
+        let cams = candidate_viewpoints(&model, &views, &pose, n, Viewpoints::Above).unwrap();
         assert_eq!(cams.len(), n);
-        let c = s.pose.apply(model.mesh.bounds().unwrap().centre());
+        let c = pose.apply(model.mesh.bounds().unwrap().centre());
         let d0 = views.iter().map(|v| v.camera().centre().distance(c)).sum::<f64>() / 3.0;
         let up = views
             .iter()
@@ -294,8 +283,8 @@ mod tests {
             }
         }
         // The sphere is the old lattice, both halves.
-        let sphere = candidate_viewpoints(&model, &views, &s.pose, n, Viewpoints::Sphere).unwrap();
-        assert_eq!(sphere, sphere_candidates(&model, &views, &s.pose, n).unwrap());
+        let sphere = candidate_viewpoints(&model, &views, &pose, n, Viewpoints::Sphere).unwrap();
+        assert_eq!(sphere, sphere_candidates(&model, &views, &pose, n).unwrap());
         let up0 = -(views[0].camera().rotation.transpose() * DVec3::Y);
         let below = sphere.iter().filter(|k| (k.centre() - c).dot(up0) < 0.0).count();
         assert_eq!(below, n / 2);
@@ -310,7 +299,7 @@ mod tests {
             views[0].clone(),
             View::new("upside down", flipped, mask, None, None, &Default::default()).unwrap(),
         ];
-        let cams = candidate_viewpoints(&model, &pair, &s.pose, n, Viewpoints::Above).unwrap();
+        let cams = candidate_viewpoints(&model, &pair, &pose, n, Viewpoints::Above).unwrap();
         assert!(cams.iter().all(|k| (k.centre() - c).dot(up0) > 0.0));
     }
 
@@ -318,25 +307,14 @@ mod tests {
     fn a_view_along_the_existing_one_helps_less_than_a_view_across_it() {
         // One view constrains depth (and scale) poorly; a second view at 90° fixes it,
         // a second view beside the first hardly does.
-        let mesh = crate::app::synth::blob_mesh(10, 14);
-        let s = synthesize(
-            &mesh,
-            &SynthSettings {
-                views: 1,
-                ..Default::default()
-            },
-            None,
-        )
-        .unwrap();
-        let model = RenderMesh::new(mesh);
-        let views = s.views();
+        let (model, views, pose) = blob_scene(1);
         let windows = [Window::for_view(
             &views[0],
             crate::loss::target::WindowMode::Object { margin: 0.3 },
         )];
         let noise = NoiseModel::default();
-        let u = fit_uncertainty(&model, &views, &windows, &s.pose, &[1.0], Free::All, &noise).unwrap();
-        let c = s.pose.apply(model.mesh.bounds().unwrap().centre());
+        let u = fit_uncertainty(&model, &views, &windows, &pose, &[1.0], Free::All, &noise).unwrap();
+        let c = pose.apply(model.mesh.bounds().unwrap().centre());
         let cam0 = views[0].camera();
         let eye0 = cam0.centre() - c;
         let up = -(cam0.rotation.transpose() * DVec3::Y);
@@ -349,7 +327,7 @@ mod tests {
             k
         };
         let behind = Camera::look_at(c + eye0, c + eye0 * 2.0, up, cam0.width, cam0.height, cam0.fx);
-        let ranked = rank_views(&model, &s.pose, &u, &[make(beside), make(across), behind], &noise).unwrap();
+        let ranked = rank_views(&model, &pose, &u, &[make(beside), make(across), behind], &noise).unwrap();
         assert_eq!(ranked[0].index, 1, "{ranked:?}");
         assert_eq!(ranked[1].index, 0);
         assert!(

@@ -195,3 +195,12 @@ fn empty_masks_have_defined_figures() {
     assert_eq!(metrics::hausdorff_px(&a, &e), 30.0);
     assert_eq!(metrics::mean_contour_distance_px(&a, &e), 30.0);
 }
+
+#[test]
+fn the_median_is_the_middle_or_the_mean_of_the_two_middles() {
+    use localisebot::metrics::median;
+    assert_eq!(median(&[3.0, -1.0, 2.0]), 2.0);
+    assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
+    assert_eq!(median(&[7.0]), 7.0);
+    assert!(median(&[]).is_nan());
+}

@@ -74,9 +74,8 @@ fn fit(mesh: &Mesh, views: Vec<View>, truth: &Pose) -> (f64, f64, FitResult) {
     (e.rotation_deg, e.scale, est.result(0.0, Some(truth)))
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    0.5 * (v[(v.len() - 1) / 2] + v[v.len() / 2])
+fn median(v: Vec<f64>) -> f64 {
+    localisebot::metrics::median(&v)
 }
 
 #[test]
