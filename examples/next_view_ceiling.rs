@@ -9,6 +9,10 @@
 //! view").
 //!
 //!     cargo run --release --example next_view_ceiling -- FIRST LAST
+//!
+//! Environment: `DRAWS` (noise draws per candidate, default 3, at least 2), `DUMP`
+//! (set: also print `logs SEED CANDIDATE ln(ADD)…` per candidate, best-ranked first,
+//! for offline analysis).
 
 use localisebot::app::coverage::{CoverageScenes, NextViewSetup};
 use localisebot::io;
@@ -80,6 +84,12 @@ fn main() {
         }
         if logs.len() < 6 {
             continue;
+        }
+        if std::env::var_os("DUMP").is_some() {
+            for (i, v) in &logs {
+                let v: Vec<String> = v.iter().map(|x| format!("{x:.5}")).collect();
+                println!("logs {seed} {i} {}", v.join(" "));
+            }
         }
         let all: Vec<usize> = (0..logs.len()).collect();
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;

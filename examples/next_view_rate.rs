@@ -8,7 +8,9 @@
 //! Environment: `SPREAD` (degrees between the two stops; default the synthetic
 //! scene's cameras), `NOISE` (px, default 1), `NV` (candidates, default 64), `MESH` (a
 //! mesh file or a shape name of `synth --shape`, default the shared Duck), `W`, `H`
-//! (image size, default 160×120), `ABOVE` (set: candidates on the upper half-sphere).
+//! (image size, default 160×120), `ABOVE` (set: candidates on the upper half-sphere),
+//! `DRAWS` (noise draws of the new view's mask each candidate's ADD is the geometric
+//! mean of; default 6, as the test; 1 = a single photograph).
 
 use localisebot::app::coverage::{next_view_case, CoverageScenes};
 use localisebot::io;
@@ -50,6 +52,7 @@ fn main() {
                 Viewpoints::Sphere
             },
             5,
+            std::env::var("DRAWS").ok().and_then(|s| s.parse().ok()).unwrap_or(6),
             std::env::var("SPREAD").ok().and_then(|s| s.parse().ok()),
         ) {
             Ok(Some(c)) => {

@@ -264,3 +264,12 @@ pub fn median(v: &[f64]) -> f64 {
         n => 0.5 * (s[n / 2 - 1] + s[n / 2]),
     }
 }
+
+/// The geometric mean `exp(mean(ln x))` of positive values (0 when one is 0), NaN for
+/// an empty slice.
+pub fn geometric_mean(x: &[f64]) -> f64 {
+    if x.is_empty() {
+        return f64::NAN;
+    }
+    (x.iter().map(|v| v.ln()).sum::<f64>() / x.len() as f64).exp()
+}

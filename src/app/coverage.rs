@@ -121,10 +121,17 @@ pub struct NextViewCase {
     pub seed: u64,
     /// The true ADD of the 2-view fit.
     pub add_before: f64,
-    /// The true ADD after adding the top-ranked candidate and refitting.
+    /// The true ADD after adding the top-ranked candidate and refitting: the geometric
+    /// mean over `draws` noise draws of the new view's mask (see [`next_view_case`]).
     pub add_top: f64,
-    /// The true ADDs after adding each random candidate instead.
+    /// The same for each random candidate instead.
     pub add_random: Vec<f64>,
+    /// The noise draws each candidate's ADD is averaged over.
+    pub draws: u64,
+    /// The top candidate's ADD under each draw.
+    pub top_draws: Vec<f64>,
+    /// Each random candidate's ADD under each draw.
+    pub random_draws: Vec<Vec<f64>>,
 }
 
 impl NextViewCase {
@@ -133,9 +140,15 @@ impl NextViewCase {
         metrics::median(&self.add_random)
     }
 
-    /// Whether the top candidate beat the median random one.
+    /// Whether the top candidate beat the median random one (expected ADDs).
     pub fn top_wins(&self) -> bool {
         self.add_top < self.median_random()
+    }
+
+    /// Whether it did on noise draw `draw` alone: the outcome of single photographs.
+    pub fn top_wins_draw(&self, draw: usize) -> bool {
+        let random: Vec<f64> = self.random_draws.iter().filter_map(|r| r.get(draw).copied()).collect();
+        self.top_draws.get(draw).is_some_and(|&t| t < metrics::median(&random))
     }
 }
 
@@ -143,10 +156,17 @@ impl NextViewCase {
 /// `scenes`; the synthetic scene's two cameras, or with `spread_deg` two cameras that
 /// far apart about the object), `candidates` viewpoints over `shell` ranked, then the fit refined from its pose
 /// with a third view from the top candidate, and again with each of `randoms` other
-/// candidates drawn at random (masks rendered at the truth, roughened alike). `None`
-/// when the 2-view fit fails or is more than 10 % of the diameter off.
+/// candidates drawn at random (masks rendered at the truth, roughened alike; a random
+/// candidate that does not see the truth whole is left out). Each candidate's ADD is
+/// the geometric mean over `draws` (≥ 1) independent noise draws of its mask, each
+/// refitted: the expected outcome of a photograph from there, which is what a ranking
+/// can predict — a single draw's ADD varies between draws three times as much as the
+/// expected ADD between candidates (BENCHMARKS.md "Next best view"). `None` when the
+/// 2-view fit fails or is more than 10 % of the diameter off, or the top candidate
+/// does not see the truth whole.
 ///
 /// Errors: the scene cannot be made or a fit errs.
+#[allow(clippy::too_many_arguments)]
 pub fn next_view_case(
     mesh: &Mesh,
     seed: u64,
@@ -154,6 +174,7 @@ pub fn next_view_case(
     candidates: usize,
     shell: Viewpoints,
     randoms: usize,
+    draws: u64,
     spread_deg: Option<f64>,
 ) -> Result<Option<NextViewCase>> {
     use rand::seq::SliceRandom;
@@ -166,18 +187,22 @@ pub fn next_view_case(
     };
     let mut rng = rand::rngs::SmallRng::seed_from_u64(seed ^ 0x6e62_7620);
     let picks: Vec<usize> = rest.choose_multiple(&mut rng, randoms).copied().collect();
-    let Some(add_top) = setup.refit(top, 0)? else {
+    let draws = draws.max(1);
+    let Some(top_draws) = setup.refits(top, draws)? else {
         return Ok(None);
     };
-    let add_random = picks
+    let random_draws = picks
         .iter()
-        .filter_map(|&i| setup.refit(i, 0).transpose())
-        .collect::<Result<Vec<f64>>>()?;
+        .filter_map(|&i| setup.refits(i, draws).transpose())
+        .collect::<Result<Vec<Vec<f64>>>>()?;
     Ok(Some(NextViewCase {
         seed,
         add_before: setup.add_before(),
-        add_top,
-        add_random,
+        add_top: metrics::geometric_mean(&top_draws),
+        add_random: random_draws.iter().map(|r| metrics::geometric_mean(r)).collect(),
+        draws,
+        top_draws,
+        random_draws,
     }))
 }
 
@@ -277,9 +302,17 @@ impl NextViewSetup {
         metrics::add(&self.mesh, &self.fitted, &self.truth)
     }
 
+    /// [`NextViewSetup::refit`]'s ADD under each of draws `0..draws`; `None` when
+    /// the candidate does not see the truth.
+    ///
+    /// Errors: a fit errs.
+    pub fn refits(&self, index: usize, draws: u64) -> Result<Option<Vec<f64>>> {
+        (0..draws).map(|d| self.refit(index, d)).collect()
+    }
+
     /// The true ADD after refitting from the 2-view pose with a third view from
-    /// candidate `index`, its mask roughened with noise draw `draw` (draw 0 is the one
-    /// [`next_view_case`] uses); `None` when the candidate does not see the truth.
+    /// candidate `index`, its mask roughened with noise draw `draw` ([`next_view_case`]
+    /// uses draws `0..draws`); `None` when the candidate does not see the truth.
     ///
     /// Errors: the fit errs.
     pub fn refit(&self, index: usize, draw: u64) -> Result<Option<f64>> {

@@ -204,3 +204,13 @@ fn the_median_is_the_middle_or_the_mean_of_the_two_middles() {
     assert_eq!(median(&[7.0]), 7.0);
     assert!(median(&[]).is_nan());
 }
+
+#[test]
+fn the_geometric_mean_is_the_nth_root_of_the_product() {
+    use localisebot::metrics::geometric_mean;
+    assert!((geometric_mean(&[2.0, 8.0]) - 4.0).abs() < 1e-12);
+    assert!((geometric_mean(&[1.0, 10.0, 100.0]) - 10.0).abs() < 1e-12);
+    assert!((geometric_mean(&[5.0]) - 5.0).abs() < 1e-12);
+    assert_eq!(geometric_mean(&[0.0, 3.0]), 0.0);
+    assert!(geometric_mean(&[]).is_nan());
+}

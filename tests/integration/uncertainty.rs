@@ -7,6 +7,7 @@ use crate::data;
 use localisebot::app::coverage::{coverage, coverage_case, next_view_case, CoverageCase, CoverageScenes};
 use localisebot::io;
 use localisebot::uncertainty::Viewpoints;
+use rayon::prelude::*;
 
 fn cases(first: u64, last: u64, noise_px: f64) -> Vec<CoverageCase> {
     let path = data("gltf/Duck/glTF-Binary/Duck.glb");
@@ -75,15 +76,16 @@ fn the_95_percent_bound_holds_the_truth_in_85_to_99_percent_of_fits() {
 }
 
 #[test]
-fn the_suggested_view_beats_the_median_random_one_more_often_than_not() {
-    // The issue asks for at least 70 %; measured on held-out seed sets the rate is
-    // 54–75 % (BENCHMARKS.md "Next best view"; on these scenes even a ranking chosen with
-    // hindsight expects 67 %: `examples/next_view_ceiling.rs`), so this asserts what
-    // holds — better than a random choice, and an improvement on the 2-view fit — and
-    // prints the rate.
+fn the_suggested_view_beats_the_median_random_one_in_70_percent_of_scenes() {
     // Two stops 45° apart on one side of the object (masks roughened by 1 px), fitted
     // from no initial pose; 64 sphere candidates ranked; the fit refined with a third
-    // view from the top one, and from each of 5 random others.
+    // view from the top one, and from each of 5 random others (masks rendered at the
+    // truth, roughened alike). Each candidate's ADD is the geometric mean over 6 noise
+    // draws of its mask, each refitted: the expected outcome of a photograph from
+    // there. A single draw's outcome is mostly that draw's noise (its log ADD varies
+    // three times as much between draws as between candidates), so single draws give
+    // 63 % on these scenes, and even a ranking chosen with hindsight 67–77 %
+    // (`examples/next_view_ceiling.rs`, BENCHMARKS.md "Next best view").
     let path = data("gltf/Duck/glTF-Binary/Duck.glb");
     let bytes = std::fs::read(&path).unwrap();
     let mesh = io::load_mesh(&path.to_string_lossy(), &bytes, &|_| None).unwrap();
@@ -93,8 +95,10 @@ fn the_suggested_view_beats_the_median_random_one_more_often_than_not() {
         noise_px: 1.0,
         correlation_px: 12.0,
     };
-    let cases: Vec<_> = (500..=539)
-        .filter_map(|seed| next_view_case(&mesh, seed, &scenes, 64, Viewpoints::Sphere, 5, Some(45.0)).unwrap())
+    let seeds: Vec<u64> = (500..=539).chain(600..=639).collect();
+    let cases: Vec<_> = seeds
+        .par_iter()
+        .filter_map(|&seed| next_view_case(&mesh, seed, &scenes, 64, Viewpoints::Sphere, 5, 6, Some(45.0)).unwrap())
         .collect();
     let wins = cases.iter().filter(|c| c.top_wins()).count();
     for c in &cases {
@@ -113,9 +117,15 @@ fn the_suggested_view_beats_the_median_random_one_more_often_than_not() {
         cases.len(),
         100.0 * rate
     );
-    assert!(cases.len() >= 30, "only {} 2-view fits found the object", cases.len());
-    assert!(cases.iter().all(|c| c.add_random.len() == 5));
-    assert!(rate > 0.5, "rate {:.0} %", 100.0 * rate);
+    let single = cases.iter().filter(|c| c.top_wins_draw(0)).count();
+    println!(
+        "  single photographs (noise draw 0 alone): {single} of {} ({:.0} %)",
+        cases.len(),
+        100.0 * single as f64 / cases.len().max(1) as f64
+    );
+    assert!(cases.len() >= 60, "only {} 2-view fits found the object", cases.len());
+    assert!(cases.iter().all(|c| c.add_random.len() == 5 && c.draws == 6));
+    assert!(rate >= 0.7, "rate {:.0} %", 100.0 * rate);
     // And adding the suggested view helps on the whole.
     let improved = cases.iter().filter(|c| c.add_top < c.add_before).count();
     assert!(
