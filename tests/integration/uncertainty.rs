@@ -6,6 +6,7 @@
 use crate::data;
 use localisebot::app::coverage::{coverage, coverage_case, next_view_case, CoverageCase, CoverageScenes};
 use localisebot::io;
+use localisebot::metrics::median;
 use localisebot::uncertainty::Viewpoints;
 use rayon::prelude::*;
 
@@ -61,13 +62,9 @@ fn the_95_percent_bound_holds_the_truth_in_85_to_99_percent_of_fits() {
     assert!(add >= 0.8, "coverage of the 95 % ADD bound {:.1} %", 100.0 * add);
     // The bound is informative, not merely huge: the reported rotation spread is
     // within a factor of 3 of the typical true rotation error.
-    let med = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
     let (err, sd) = (
-        med(all.iter().map(|c| c.rotation_deg).collect()),
-        med(all.iter().map(|c| c.rotation_sd_deg).collect()),
+        median(&all.iter().map(|c| c.rotation_deg).collect::<Vec<_>>()),
+        median(&all.iter().map(|c| c.rotation_sd_deg).collect::<Vec<_>>()),
     );
     assert!(
         sd < 3.0 * err && sd > err / 3.0,
