@@ -33,7 +33,7 @@ const _: () = assert!(
 
 /// The render of `raster::silhouette` (RasterKind::Edge): the edge kernel's own.
 fn silhouette_alpha(mesh: &Mesh, pose: &Pose, cam: &Camera, s: &SoftSettings) -> Vec<f64> {
-    let m = RenderMesh::new(mesh.clone());
+    let m = RenderMesh::exact(mesh.clone());
     let mut r = SilhouetteRenderer::new(RasterKind::Edge);
     r.render(&m, pose, cam, s).unwrap().to_vec()
 }
@@ -106,7 +106,7 @@ fn edge_pose_gradients_and_jacobians_match_central_differences_in_the_browser() 
         ("toy", toy_plane(), DVec3::new(-1.0, 0.6, 0.8)),
         ("blob", blob_mesh(14, 30), DVec3::new(0.3, -0.4, 2.5)),
     ] {
-        let m = RenderMesh::new(mesh.clone());
+        let m = RenderMesh::exact(mesh.clone());
         let cam = look(&mesh, dir, 3.0, 96, 96, 110.0);
         let s = SoftSettings { sigma: 0.6, eps: 1e-15 };
         let w = noise(96 * 96, 11);

@@ -65,6 +65,11 @@ pub struct FitOptions {
     /// The soft rasteriser (default edge).
     #[arg(long, value_enum)]
     pub raster: Option<RasterArg>,
+    /// The most a simplified level of the mesh may move a refinement silhouette,
+    /// pixels, at σ ≥ 1 px² (times σ at sharper stages; default 0.5; 0: always the
+    /// full mesh).
+    #[arg(long)]
+    pub detail_px: Option<f64>,
     /// Also estimate a small rotation and translation correction of every view's
     /// camera, jointly with the pose, under a prior (--camera-prior-deg,
     /// --camera-prior-distance); the result lists each view's correction. They are
@@ -169,6 +174,9 @@ impl FitOptions {
         }
         if self.no_robust {
             s.robust = false;
+        }
+        if let Some(d) = self.detail_px {
+            s.detail_px = d;
         }
         if let Some(r) = self.raster {
             s.raster = r.kind();

@@ -171,12 +171,12 @@ impl Estimator {
         })?;
         let windows = views.iter().map(|v| Window::for_view(v, settings.window)).collect();
         // Cells of about two pixels at the search resolution: silhouettes within a pixel.
-        let search_model = RenderMesh::new(mesh.clustered(settings.search.resolution * 3 / 8));
+        let search_model = RenderMesh::exact(mesh.clustered(settings.search.resolution * 3 / 8));
         let mut est = Estimator {
             centre: b.centre(),
             radius: (b.size().length() * 0.5).max(1e-12),
             search_model,
-            model: RenderMesh::new(mesh),
+            model: RenderMesh::with_detail(mesh, settings.detail_px),
             views,
             windows,
             phase: Phase::Search,

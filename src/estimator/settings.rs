@@ -10,6 +10,7 @@ use crate::optim::adam::AdamSettings;
 use crate::optim::schedule::{Optimiser, StageSettings};
 use crate::optim::search::SearchSettings;
 use crate::pose::Pose;
+use crate::raster::lod::DEFAULT_DETAIL_PX;
 use crate::raster::silhouette::RasterKind;
 use crate::raster::soft::SoftSettings;
 use crate::verdict::{Verdict, VerdictThresholds};
@@ -64,6 +65,10 @@ pub struct FitSettings {
     /// Estimate a correction of every view's camera jointly with the pose, under this
     /// prior, after the stages (`fit --refine-cameras`; default off).
     pub refine_cameras: Option<CameraPrior>,
+    /// The most, in pixels, a simplified level of the mesh may move a refinement
+    /// render's silhouette at σ ≥ 1 px², times σ at sharper σ (`raster::lod`; default
+    /// [`DEFAULT_DETAIL_PX`]; 0 renders the full mesh always).
+    pub detail_px: f64,
 }
 
 impl Default for FitSettings {
@@ -82,6 +87,7 @@ impl Default for FitSettings {
             robust: true,
             raster: RasterKind::Edge,
             refine_cameras: None,
+            detail_px: DEFAULT_DETAIL_PX,
         }
     }
 }
@@ -125,6 +131,9 @@ impl FitSettings {
             if !(margin.is_finite() && margin >= 0.0) {
                 return bad(format!("window margin must be ≥ 0, got {margin}"));
             }
+        }
+        if !(self.detail_px.is_finite() && self.detail_px >= 0.0) {
+            return bad(format!("detail must be ≥ 0 pixels, got {}", self.detail_px));
         }
         if let Some(p) = &self.refine_cameras {
             p.validate()?;

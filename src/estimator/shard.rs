@@ -163,8 +163,8 @@ impl Shard {
         })?;
         let windows = views.iter().map(|v| Window::for_view(v, settings.window)).collect();
         Ok(Shard {
-            search_model: RenderMesh::new(mesh.clustered(settings.search.resolution * 3 / 8)),
-            model: RenderMesh::new(mesh),
+            search_model: RenderMesh::exact(mesh.clustered(settings.search.resolution * 3 / 8)),
+            model: RenderMesh::with_detail(mesh, settings.detail_px),
             rotations: settings.search.sampling.rotations(),
             centre: b.centre(),
             views,

@@ -107,6 +107,8 @@ pub struct EdgeSilhouette {
     snapped: Vec<[i32; 2]>,
     diff: Vec<i32>,
     sat: Vec<u32>,
+    /// Per pixel, whether it is `DEEP` pixels inside the coverage (`candidates.rs`).
+    deep: Vec<u8>,
     /// Edges whose present faces lie on one side, before their setup.
     candidates: Vec<candidates::Candidate>,
     /// Candidates whose m-box meets the canvas, by increasing edge index.
@@ -145,6 +147,7 @@ impl EdgeSilhouette {
             snapped: Vec::new(),
             diff: Vec::new(),
             sat: Vec::new(),
+            deep: Vec::new(),
             candidates: Vec::new(),
             edges: Vec::new(),
             outline: 0,

@@ -15,6 +15,7 @@ use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::pose::Pose;
 use crate::raster::edge::{EdgeSilhouette, EdgeTopology};
+use crate::raster::lod::{DetailLevels, DEFAULT_DETAIL_PX};
 use crate::raster::project::{PoseProjection, POSE_DIM};
 use crate::raster::soft::{SoftRasterizer, SoftSettings};
 use glam::DVec2;
@@ -34,19 +35,47 @@ pub enum RasterKind {
 }
 
 /// A mesh with the edge topology the silhouette-edge rasteriser needs (welded
-/// adjacency, built once per mesh).
+/// adjacency, built once per mesh) and its levels of detail (`raster::lod`).
 #[derive(Debug, Clone)]
 pub struct RenderMesh {
     /// The mesh, model frame.
     pub mesh: Mesh,
     topology: EdgeTopology,
+    detail: DetailLevels,
 }
 
 impl RenderMesh {
-    /// Builds the topology of `mesh`.
+    /// Builds the topology of `mesh` and its levels of detail for the default
+    /// tolerance, [`DEFAULT_DETAIL_PX`].
     pub fn new(mesh: Mesh) -> RenderMesh {
+        RenderMesh::with_detail(mesh, DEFAULT_DETAIL_PX)
+    }
+
+    /// As [`RenderMesh::new`], with levels whose silhouettes move by at most
+    /// `tolerance_px` pixels (0: the mesh itself in every render).
+    pub fn with_detail(mesh: Mesh, tolerance_px: f64) -> RenderMesh {
         let topology = EdgeTopology::from_mesh(&mesh);
-        RenderMesh { mesh, topology }
+        let detail = DetailLevels::build(&mesh, tolerance_px);
+        RenderMesh { mesh, topology, detail }
+    }
+
+    /// The mesh alone, never simplified.
+    pub fn exact(mesh: Mesh) -> RenderMesh {
+        RenderMesh::with_detail(mesh, 0.0)
+    }
+
+    /// Its levels of detail.
+    pub fn detail(&self) -> &DetailLevels {
+        &self.detail
+    }
+
+    /// The mesh and topology the edge rasteriser renders at `pose` in `camera` at
+    /// softness `sigma`: the coarsest level within the tolerance, or the mesh itself.
+    pub fn for_render(&self, pose: &Pose, camera: &Camera, sigma: f64) -> (&Mesh, &EdgeTopology) {
+        match self.detail.choose(pose, camera, sigma) {
+            Some(l) => (&l.mesh, &l.topology),
+            None => (&self.mesh, &self.topology),
+        }
     }
 
     /// The edge topology.
@@ -101,10 +130,13 @@ impl SilhouetteRenderer {
         }
     }
 
-    fn render_edge(&mut self, m: &RenderMesh, pose: &Pose, camera: &Camera, s: &SoftSettings) -> Result<()> {
-        self.projection.project(&m.mesh, pose, camera);
+    /// Renders the level `m` chooses; the number of its vertices.
+    fn render_edge(&mut self, m: &RenderMesh, pose: &Pose, camera: &Camera, s: &SoftSettings) -> Result<usize> {
+        let (mesh, topology) = m.for_render(pose, camera, s.sigma);
+        self.projection.project(mesh, pose, camera);
         self.edge
-            .render(&m.topology, &self.projection.proj, &m.mesh.triangles, camera, s)
+            .render(topology, &self.projection.proj, &mesh.triangles, camera, s)?;
+        Ok(mesh.positions.len())
     }
 
     /// Renders the silhouette of `m` at `pose` in `camera`.
@@ -113,7 +145,9 @@ impl SilhouetteRenderer {
             RasterKind::SoftRas => {
                 self.soft.render(&m.mesh, pose, camera, s)?;
             }
-            RasterKind::Edge => self.render_edge(m, pose, camera, s)?,
+            RasterKind::Edge => {
+                self.render_edge(m, pose, camera, s)?;
+            }
         }
         Ok(self.alpha())
     }
@@ -131,8 +165,8 @@ impl SilhouetteRenderer {
         if self.kind == RasterKind::SoftRas {
             return self.soft.render_with_gradients(&m.mesh, pose, camera, s, field);
         }
-        self.render_edge(m, pose, camera, s)?;
-        self.index_touched(m.mesh.positions.len());
+        let n = self.render_edge(m, pose, camera, s)?;
+        self.index_touched(n);
         // Each field's ∂/∂uv per touched vertex, in one pass over the records.
         self.grad_buf.clear();
         self.grad_buf.resize(self.touched.len() * K, DVec2::ZERO);
@@ -196,8 +230,8 @@ impl SilhouetteRenderer {
             self.soft.render_with_jacobians(&m.mesh, pose, camera, s, visit)?;
             return Ok(());
         }
-        self.render_edge(m, pose, camera, s)?;
-        self.index_touched(m.mesh.positions.len());
+        let n = self.render_edge(m, pose, camera, s)?;
+        self.index_touched(n);
         self.vertex_jac.clear();
         let p = &self.projection;
         self.vertex_jac

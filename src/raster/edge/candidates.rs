@@ -73,6 +73,10 @@ pub(super) enum Accept {
     PerPixel,
 }
 
+/// How deep (in pixels, Chebyshev) a pixel must be inside the coverage for
+/// `deep_inside`: the ends' pixels ± 2 of an edge at most one pixel long lie within 3.
+const DEEP: i64 = 3;
+
 /// Largest box (pixel cells) [`EdgeSilhouette::classify`] decides at once (beyond any
 /// canvas; keeps its integer arithmetic far from overflow).
 const MAX_CLASSIFY_CELLS: f64 = 1e12;
@@ -207,6 +211,9 @@ impl EdgeSilhouette {
             if shi.x < -m - 1.0 || shi.y < -m - 1.0 || slo.x > wm + m + 1.0 || slo.y > hm + m + 1.0 {
                 continue;
             }
+            if self.deep_inside(sa, sb) {
+                continue;
+            }
             if self.classify(slo - DVec2::splat(1.001), shi + DVec2::splat(1.001)) == Accept::Never {
                 continue;
             }
@@ -252,8 +259,25 @@ impl EdgeSilhouette {
         }
     }
 
+    /// Whether a short edge with snapped ends `sa`, `sb` lies deep inside the coverage:
+    /// their pixels are at most one apart and the one of `sa` is [`DEEP`] deep. Then
+    /// every cell of the box `classify` would count for it (the ends' pixels ± 2) is
+    /// covered, so its verdict is `Never`: this decides it with one lookup.
+    #[inline(always)]
+    fn deep_inside(&self, sa: DVec2, sb: DVec2) -> bool {
+        let (px, py) = (floor_i64(sa.x + 0.5), floor_i64(sa.y + 0.5));
+        let (qx, qy) = (floor_i64(sb.x + 0.5), floor_i64(sb.y + 0.5));
+        let (w, h) = (i64::from(self.width), i64::from(self.height));
+        (px - qx).abs() <= 1
+            && (py - qy).abs() <= 1
+            && (0..w).contains(&px)
+            && (0..h).contains(&py)
+            && self.deep[(py * w + px) as usize] != 0
+    }
+
     /// The summed-area table of the coverage: `sat[(y + 1)(w + 1) + x + 1]` counts the
-    /// covered pixels in columns `0..=x` of rows `0..=y`.
+    /// covered pixels in columns `0..=x` of rows `0..=y`; and the pixels [`DEEP`] deep
+    /// (every pixel within `DEEP` columns and rows covered, all on the canvas).
     fn build_sat(&mut self) {
         let (w, h) = (self.width as usize, self.height as usize);
         let stride = w + 1;
@@ -264,6 +288,18 @@ impl EdgeSilhouette {
             for x in 0..w {
                 run += u32::from(self.coverage.data[y * w + x] != 0);
                 self.sat[(y + 1) * stride + x + 1] = self.sat[y * stride + x + 1] + run;
+            }
+        }
+        let d = DEEP as usize;
+        let full = ((2 * d + 1) * (2 * d + 1)) as u32;
+        self.deep.clear();
+        self.deep.resize(w * h, 0);
+        for y in d..h.saturating_sub(d) {
+            let (top, bottom) = ((y - d) * stride, (y + d + 1) * stride);
+            for x in d..w.saturating_sub(d) {
+                let (l, r) = (x - d, x + d + 1);
+                let n = self.sat[bottom + r] + self.sat[top + l] - self.sat[bottom + l] - self.sat[top + r];
+                self.deep[y * w + x] = u8::from(n == full);
             }
         }
     }
