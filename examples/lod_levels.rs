@@ -6,6 +6,7 @@
 //! and 2CylinderEngine).
 
 use localisebot::app::synth::{synthesize, SynthSettings};
+use localisebot::raster::edge::EdgeTopology;
 use localisebot::raster::lod::{DetailLevels, DEFAULT_DETAIL_PX};
 use std::time::Instant;
 
@@ -22,7 +23,7 @@ fn main() {
         let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
         let mesh = localisebot::io::load_mesh(path, &bytes, &|_| None).unwrap_or_else(|e| panic!("{e}"));
         let t = Instant::now();
-        let d = DetailLevels::build(&mesh, DEFAULT_DETAIL_PX);
+        let d = DetailLevels::build(&mesh, &EdgeTopology::from_mesh(&mesh), DEFAULT_DETAIL_PX);
         println!(
             "{path}: {} triangles, {} vertices, diameter {:.4}; welded in {:.0} ms",
             mesh.triangles.len(),

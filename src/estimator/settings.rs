@@ -133,7 +133,10 @@ impl FitSettings {
             }
         }
         if !(self.detail_px.is_finite() && self.detail_px >= 0.0) {
-            return bad(format!("detail must be ≥ 0 pixels, got {}", self.detail_px));
+            return bad(format!(
+                "detail (--detail-px) must be a number ≥ 0 pixels, got {}",
+                self.detail_px
+            ));
         }
         if let Some(p) = &self.refine_cameras {
             p.validate()?;

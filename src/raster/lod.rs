@@ -6,8 +6,8 @@
 //!
 //! Building ([`DetailLevels::build`] once per mesh, each level when first chosen):
 //!
-//! 1. The mesh is welded (bit-identical positions become one vertex, as glTF seams
-//!    repeat them), and triangles with a repeated vertex or the same vertex set as an
+//! 1. The mesh is welded (the edge topology's weld: glTF seams repeat positions), and
+//!    triangles with a repeated welded vertex or the same welded vertex set as an
 //!    earlier triangle are dropped (double-sided sheets: the coverage is a union, so
 //!    neither changes the silhouette).
 //! 2. Level k has the error bound `d·2^(−k/2)`, from d/2048 to d/32 (d the mesh's
@@ -101,14 +101,15 @@ impl DetailLevels {
         DetailLevels::default()
     }
 
-    /// The levels of `mesh` for renders that may move its silhouette by at most
-    /// `tolerance_px` pixels at σ ≥ 1 px² (0, negative or not finite: no levels). Only
-    /// the weld happens here; each level is simplified when first chosen.
-    pub fn build(mesh: &Mesh, tolerance_px: f64) -> DetailLevels {
+    /// The levels of `mesh` (whose edge topology is `topology`) for renders that may
+    /// move its silhouette by at most `tolerance_px` pixels at σ ≥ 1 px² (0, negative
+    /// or not finite: no levels). Each level is simplified when first chosen.
+    pub fn build(mesh: &Mesh, topology: &EdgeTopology, tolerance_px: f64) -> DetailLevels {
         let Some(b) = mesh.bounds() else {
             return DetailLevels::none();
         };
-        if !(tolerance_px > 0.0 && tolerance_px.is_finite()) || mesh.triangles.len() < MIN_TRIANGLES {
+        let own = topology.vertex_count == mesh.positions.len() && topology.face_count == mesh.triangles.len();
+        if !(tolerance_px > 0.0 && tolerance_px.is_finite()) || mesh.triangles.len() < MIN_TRIANGLES || !own {
             return DetailLevels::none();
         }
         // The smallest sphere about the box's centre holding every vertex a triangle uses.
@@ -124,7 +125,7 @@ impl DetailLevels {
         if !(diameter > 0.0 && diameter.is_finite() && radius.is_finite()) {
             return DetailLevels::none();
         }
-        let (positions, indices) = weld(mesh);
+        let (positions, indices) = welded(mesh, topology);
         let packed = positions.iter().map(|p| (*p - centre).as_vec3().to_array()).collect();
         let bounds: Vec<f64> = (COARSEST..=FINEST)
             .rev()
@@ -231,31 +232,25 @@ fn simplified(source: &Source, bound: f64) -> Option<Level> {
     })
 }
 
-/// Bit-identical positions welded; degenerate and repeated triangles dropped.
-fn weld(mesh: &Mesh) -> (Vec<DVec3>, Vec<u32>) {
-    let mut index: HashMap<[u64; 3], u32> = HashMap::new();
+/// The welded triangles (the topology's representatives) without degenerate or
+/// repeated ones, over their own compacted vertices.
+fn welded(mesh: &Mesh, topology: &EdgeTopology) -> (Vec<DVec3>, Vec<u32>) {
+    let mut slot = vec![u32::MAX; mesh.positions.len()];
     let mut positions = Vec::new();
-    let remap: Vec<u32> = mesh
-        .positions
-        .iter()
-        .map(|p| {
-            *index.entry(p.to_array().map(f64::to_bits)).or_insert_with(|| {
-                positions.push(*p);
-                positions.len() as u32 - 1
-            })
-        })
-        .collect();
     let mut seen = HashSet::new();
-    let mut indices = Vec::with_capacity(mesh.triangles.len() * 3);
-    for t in &mesh.triangles {
-        if t.iter().any(|&i| i as usize >= remap.len()) {
+    let mut indices = Vec::with_capacity(topology.welded_faces.len() * 3);
+    for w in &topology.welded_faces {
+        let mut key = *w;
+        key.sort_unstable();
+        if key[0] == key[1] || key[1] == key[2] || !seen.insert(key) {
             continue;
         }
-        let w = t.map(|i| remap[i as usize]);
-        let mut key = w;
-        key.sort_unstable();
-        if key[0] != key[1] && key[1] != key[2] && seen.insert(key) {
-            indices.extend_from_slice(&w);
+        for &v in w {
+            if slot[v as usize] == u32::MAX {
+                slot[v as usize] = positions.len() as u32;
+                positions.push(mesh.positions[v as usize]);
+            }
+            indices.push(slot[v as usize]);
         }
     }
     (positions, indices)
@@ -323,7 +318,7 @@ mod tests {
         let [a, b, c] = soup.triangles[1];
         soup.triangles.push([c, b, a]);
         soup.triangles.push([a, a, b]);
-        let (positions, indices) = weld(&soup);
+        let (positions, indices) = welded(&soup, &EdgeTopology::from_mesh(&soup));
         assert_eq!(positions.len(), 8);
         assert_eq!(indices.len(), 3 * 12);
         let m = compact(&positions, &indices);
@@ -334,7 +329,7 @@ mod tests {
     #[test]
     fn levels_get_coarser_and_far_views_choose_coarser_ones() {
         let mesh = blob_mesh(52, 100);
-        let d = DetailLevels::build(&mesh, 0.25);
+        let d = DetailLevels::build(&mesh, &EdgeTopology::from_mesh(&mesh), 0.25);
         assert_eq!(d.len(), 13);
         let used: Vec<&Level> = (0..d.len()).filter_map(|k| d.level(k)).collect();
         assert!(used.len() >= 8, "{} levels save triangles", used.len());
@@ -362,9 +357,23 @@ mod tests {
         assert!(errors.windows(2).all(|w| w[0] <= w[1]), "{errors:?}");
         assert!(errors[4] > errors[0], "{errors:?}");
         // No levels at tolerance 0, for tiny meshes, or when the sphere reaches behind.
-        assert!(DetailLevels::build(&mesh, 0.0).is_empty());
-        assert!(DetailLevels::build(&mesh, f64::NAN).is_empty());
-        assert!(DetailLevels::build(&Mesh::cuboid(DVec3::ONE), 1.0).is_empty());
+        assert!(DetailLevels::build(&mesh, &EdgeTopology::from_mesh(&mesh), 0.0).is_empty());
+        assert!(DetailLevels::build(&mesh, &EdgeTopology::from_mesh(&mesh), f64::NAN).is_empty());
+        let other = blob_mesh(20, 30);
+        assert!(DetailLevels::build(&mesh, &EdgeTopology::from_mesh(&other), 0.25).is_empty());
+        for bad in [-1.0, f64::NAN, f64::INFINITY] {
+            let s = crate::FitSettings {
+                detail_px: bad,
+                ..Default::default()
+            };
+            let e = s.validate().unwrap_err().to_string();
+            assert!(e.contains("--detail-px"), "{e}");
+        }
+        assert!({
+            let cube = Mesh::cuboid(DVec3::ONE);
+            DetailLevels::build(&cube, &EdgeTopology::from_mesh(&cube), 1.0)
+        }
+        .is_empty());
         assert!(d.choose(&Pose::IDENTITY, &camera(0.5, 128), 1.0).is_none());
         // Sharper silhouettes get a tighter tolerance: finer levels, the mesh itself at σ → 0.
         let far = camera(40.0, 128);
@@ -390,7 +399,7 @@ mod tests {
     fn a_chosen_level_moves_the_silhouette_by_less_than_the_tolerance() {
         let mesh = blob_mesh(52, 100);
         for tolerance in [0.25, 1.0] {
-            let d = DetailLevels::build(&mesh, tolerance);
+            let d = DetailLevels::build(&mesh, &EdgeTopology::from_mesh(&mesh), tolerance);
             let mut used = 0;
             for z in [3.0, 6.0, 12.0] {
                 for side in [96, 256] {

@@ -55,7 +55,7 @@ impl RenderMesh {
     /// `tolerance_px` pixels (0: the mesh itself in every render).
     pub fn with_detail(mesh: Mesh, tolerance_px: f64) -> RenderMesh {
         let topology = EdgeTopology::from_mesh(&mesh);
-        let detail = DetailLevels::build(&mesh, tolerance_px);
+        let detail = DetailLevels::build(&mesh, &topology, tolerance_px);
         RenderMesh { mesh, topology, detail }
     }
 
