@@ -43,9 +43,9 @@
 //!
 //! Speed (`candidates.rs`, `pass.rs`): the accept test is decided once per candidate
 //! when every probe of the edge lands in pixels with one verdict (hidden contours are
-//! then dropped before binning); the rest are binned into 16×16 tiles by their
-//! m-expanded boxes; a band of 16 rows keeps the nearest accepted candidate per pixel
-//! of its tiles that hold candidates; each candidate visits, row by row, only the
+//! then dropped before binning); the rest are binned into bands of 16 rows by their
+//! m-expanded boxes; a band keeps the nearest accepted candidate per pixel of the
+//! 16×16 tiles the boxes reach; each candidate visits, row by row, only the
 //! columns within m of its line, where `d² = e² + (|b − a|·excess)²` (e the line
 //! distance, excess the parameter's overshoot past the ends) is branch-free. The hard
 //! coverage itself comes from the same pass over the edges (`coverage.rs`: the
@@ -109,17 +109,23 @@ pub struct EdgeSilhouette {
     sat: Vec<u32>,
     /// Per pixel, whether it is `DEEP` pixels inside the coverage (`candidates.rs`).
     deep: Vec<u8>,
+    /// The coverage inside a one-pixel background border, `(w + 2) × (h + 2)`.
+    probe: Vec<u8>,
+    /// The edges with a non-zero net weight or many faces (`candidates.rs`).
+    busy: Vec<u32>,
     /// Edges whose present faces lie on one side, before their setup.
     candidates: Vec<candidates::Candidate>,
     /// Candidates whose m-box meets the canvas, by increasing edge index.
     edges: Vec<EdgeSetup>,
     outline: usize,
-    /// Candidates per tile (a counting sort, as `tiles.rs`' `Bins`).
+    /// Candidates per band of `TILE` rows (a counting sort), and per tile whether a
+    /// candidate's box reaches it.
     tiles_x: usize,
     tiles_y: usize,
     start: Vec<u32>,
     items: Vec<u32>,
     cursor: Vec<u32>,
+    reached: Vec<bool>,
     /// Nearest accepted candidate per pixel of the current band (`TILE·width`).
     band: Vec<Best>,
     /// Tile columns of the current band that hold candidates.
@@ -148,6 +154,8 @@ impl EdgeSilhouette {
             diff: Vec::new(),
             sat: Vec::new(),
             deep: Vec::new(),
+            probe: Vec::new(),
+            busy: Vec::new(),
             candidates: Vec::new(),
             edges: Vec::new(),
             outline: 0,
@@ -156,6 +164,7 @@ impl EdgeSilhouette {
             start: Vec::new(),
             items: Vec::new(),
             cursor: Vec::new(),
+            reached: Vec::new(),
             band: Vec::new(),
             active: Vec::new(),
         }

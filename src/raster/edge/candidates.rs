@@ -81,6 +81,12 @@ const DEEP: i64 = 3;
 /// canvas; keeps its integer arithmetic far from overflow).
 const MAX_CLASSIFY_CELLS: f64 = 1e12;
 
+/// The pixel cell `⌊x + ½⌋` of a snapped coordinate, exactly.
+#[inline(always)]
+fn cell(v: i32) -> i64 {
+    (i64::from(v) + (1 << (SUBPIXEL_BITS - 1))) >> SUBPIXEL_BITS
+}
+
 /// A snapped position back in pixels.
 #[inline(always)]
 fn unsnap(p: [i32; 2]) -> DVec2 {
@@ -144,6 +150,7 @@ impl EdgeSilhouette {
 
     /// One pass over the edges: the candidates (present faces on one side) and, with
     /// `CHAIN`, each edge's net weight in the coverage's counters.
+    #[inline(never)]
     fn edge_pass<const CHAIN: bool>(&mut self, topo: &EdgeTopology) {
         self.candidates.clear();
         // The side of face (a, b, c) is the sign of (b − a) × (c − a), c its third
@@ -158,7 +165,23 @@ impl EdgeSilhouette {
                 -s
             }
         };
+        // Branch-free first (which edges go on is unpredictable): the edges with a
+        // non-zero net weight, or many faces, compacted into `busy`.
+        self.busy.clear();
+        self.busy.resize(topo.pairs.len(), 0);
+        let mut n = 0;
         for (e, &[p0, p1]) in topo.pairs.iter().enumerate() {
+            let many = p0 == MANY_FACES;
+            let q0 = if many { 0 } else { p0 };
+            let two = p1 != NO_FACE && !many;
+            let q1 = if two { p1 } else { q0 };
+            let net = side(q0) + side(q1) * i32::from(two);
+            self.busy[n] = e as u32;
+            n += usize::from(net != 0 || many);
+        }
+        for &e in &self.busy[..n] {
+            let e = e as usize;
+            let [p0, p1] = topo.pairs[e];
             let (left, right, net) = if p0 == MANY_FACES {
                 let (mut left, mut right, mut net) = (false, false, 0i32);
                 for inc in topo.incidences(e) {
@@ -173,7 +196,7 @@ impl EdgeSilhouette {
                 let s1 = if p1 == NO_FACE { 0 } else { side(p1) };
                 ((s0 > 0) | (s1 > 0), (s0 < 0) | (s1 < 0), s0 + s1)
             };
-            // Faces on one side only imply a non-zero net: most edges stop here.
+            // Faces on one side only imply a non-zero net.
             if net == 0 {
                 continue;
             }
@@ -211,10 +234,10 @@ impl EdgeSilhouette {
             if shi.x < -m - 1.0 || shi.y < -m - 1.0 || slo.x > wm + m + 1.0 || slo.y > hm + m + 1.0 {
                 continue;
             }
-            if self.deep_inside(sa, sb) {
+            if self.deep_inside(a, b) {
                 continue;
             }
-            if self.classify(slo - DVec2::splat(1.001), shi + DVec2::splat(1.001)) == Accept::Never {
+            if self.classify_snapped(a, b) == Accept::Never {
                 continue;
             }
             let [ia, ib] = topo.ends[edge as usize];
@@ -259,14 +282,13 @@ impl EdgeSilhouette {
         }
     }
 
-    /// Whether a short edge with snapped ends `sa`, `sb` lies deep inside the coverage:
-    /// their pixels are at most one apart and the one of `sa` is [`DEEP`] deep. Then
-    /// every cell of the box `classify` would count for it (the ends' pixels ± 2) is
-    /// covered, so its verdict is `Never`: this decides it with one lookup.
+    /// Whether a short edge with snapped ends `a`, `b` lies deep inside the coverage:
+    /// their pixels are at most one apart and the one of `a` is [`DEEP`] deep. Then
+    /// every cell of the box [`Self::classify_snapped`] counts for it (the ends' pixels
+    /// ± 2) is covered, so its verdict is `Never`: this decides it with one lookup.
     #[inline(always)]
-    fn deep_inside(&self, sa: DVec2, sb: DVec2) -> bool {
-        let (px, py) = (floor_i64(sa.x + 0.5), floor_i64(sa.y + 0.5));
-        let (qx, qy) = (floor_i64(sb.x + 0.5), floor_i64(sb.y + 0.5));
+    fn deep_inside(&self, a: [i32; 2], b: [i32; 2]) -> bool {
+        let ([px, py], [qx, qy]) = (a.map(cell), b.map(cell));
         let (w, h) = (i64::from(self.width), i64::from(self.height));
         (px - qx).abs() <= 1
             && (py - qy).abs() <= 1
@@ -275,9 +297,22 @@ impl EdgeSilhouette {
             && self.deep[(py * w + px) as usize] != 0
     }
 
+    /// [`Self::classify`] of the box of snapped ends `a`, `b` grown by 1.001 px: every
+    /// probe of the edge lies within one pixel of it. In integers: the cell of
+    /// `a/2^10 − 1.001 − 1e-7` is `⌊(a − 514)/2^10⌋` and that of `b/2^10 + 1.001 +
+    /// 1e-7` is `⌊(b + 1537)/2^10⌋` exactly (no multiple of 2^10 lies between the
+    /// integer and the real numerator), so the verdict equals the float box's.
+    #[inline(always)]
+    fn classify_snapped(&self, a: [i32; 2], b: [i32; 2]) -> Accept {
+        let lo = |u: i32, v: i32| (i64::from(u.min(v)) - 514) >> SUBPIXEL_BITS;
+        let hi = |u: i32, v: i32| (i64::from(u.max(v)) + 1537) >> SUBPIXEL_BITS;
+        self.classify_cells(lo(a[0], b[0]), hi(a[0], b[0]), lo(a[1], b[1]), hi(a[1], b[1]))
+    }
+
     /// The summed-area table of the coverage: `sat[(y + 1)(w + 1) + x + 1]` counts the
-    /// covered pixels in columns `0..=x` of rows `0..=y`; and the pixels [`DEEP`] deep
-    /// (every pixel within `DEEP` columns and rows covered, all on the canvas).
+    /// covered pixels in columns `0..=x` of rows `0..=y`; the pixels [`DEEP`] deep
+    /// (every pixel within `DEEP` columns and rows covered, all on the canvas); and the
+    /// coverage inside a one-pixel background border (`probe`, for the tile pass).
     fn build_sat(&mut self) {
         let (w, h) = (self.width as usize, self.height as usize);
         let stride = w + 1;
@@ -289,6 +324,13 @@ impl EdgeSilhouette {
                 run += u32::from(self.coverage.data[y * w + x] != 0);
                 self.sat[(y + 1) * stride + x + 1] = self.sat[y * stride + x + 1] + run;
             }
+        }
+        // The coverage inside a one-pixel background border (the tile pass's probes).
+        self.probe.clear();
+        self.probe.resize((w + 2) * (h + 2), 0);
+        for y in 0..h {
+            let row = (y + 1) * (w + 2) + 1;
+            self.probe[row..row + w].copy_from_slice(&self.coverage.data[y * w..(y + 1) * w]);
         }
         let d = DEEP as usize;
         let full = ((2 * d + 1) * (2 * d + 1)) as u32;
@@ -311,7 +353,6 @@ impl EdgeSilhouette {
     /// pixel. Counted with the summed-area table.
     fn classify(&self, ra: DVec2, rb: DVec2) -> Accept {
         const SLACK: f64 = 1e-7;
-        let (w, h) = (self.width as i64, self.height as i64);
         let lo = ra.min(rb) - DVec2::splat(SLACK);
         let hi = ra.max(rb) + DVec2::splat(SLACK);
         // Boxes beyond any canvas (or NaN) are left to the per-pixel test.
@@ -322,6 +363,14 @@ impl EdgeSilhouette {
         }
         let (x0, x1) = (floor_i64(lo.x + 0.5), floor_i64(hi.x + 0.5));
         let (y0, y1) = (floor_i64(lo.y + 0.5), floor_i64(hi.y + 0.5));
+        self.classify_cells(x0, x1, y0, y1)
+    }
+
+    /// The verdict of the pixel cells `x0..=x1` × `y0..=y1` (cells off the canvas are
+    /// background): `Always` when none is covered, `Never` when all are.
+    #[inline(always)]
+    fn classify_cells(&self, x0: i64, x1: i64, y0: i64, y1: i64) -> Accept {
+        let (w, h) = (self.width as i64, self.height as i64);
         let total = (x1 - x0 + 1) * (y1 - y0 + 1);
         let (cx0, cx1) = (x0.max(0), x1.min(w - 1));
         let (cy0, cy1) = (y0.max(0), y1.min(h - 1));

@@ -1,6 +1,6 @@
-//! The tile pass (module doc of `edge.rs`, steps 5–6): candidates binned into
-//! `TILE`² tiles by their m-expanded boxes; one band of `TILE` rows at a time, each
-//! candidate visits only the columns within m of its line in the tiles it touches,
+//! The tile pass (module doc of `edge.rs`, steps 5–6): candidates binned into bands
+//! of `TILE` rows by their m-expanded boxes; one band at a time, each candidate
+//! visits, row by row, only the columns within m of its line,
 //! keeping per pixel the nearest accepted candidate; then the band's soft values and
 //! gradient records, in row-major order.
 
@@ -21,32 +21,33 @@ pub(super) struct Best {
 const NONE: u32 = u32::MAX;
 
 impl EdgeSilhouette {
-    /// Bins the candidates into tiles by their m-expanded boxes.
+    /// Bins the candidates into bands of `TILE` rows by their m-expanded boxes, and
+    /// marks the tiles they reach.
     pub(super) fn bin(&mut self) {
         self.tiles_x = (self.width as usize).div_ceil(TILE);
         self.tiles_y = (self.height as usize).div_ceil(TILE);
-        let nt = self.tiles_x * self.tiles_y;
+        let (nb, tx) = (self.tiles_y, self.tiles_x);
         self.start.clear();
-        self.start.resize(nt + 1, 0);
-        let tiles = |e: &EdgeSetup| {
-            let (tx0, tx1) = (e.x0 as usize / TILE, e.x1 as usize / TILE);
-            (e.y0 as usize / TILE..=e.y1 as usize / TILE).flat_map(move |ty| (tx0..=tx1).map(move |tx| (ty, tx)))
-        };
+        self.start.resize(nb + 1, 0);
+        self.reached.clear();
+        self.reached.resize(nb * tx, false);
         for e in &self.edges {
-            for (ty, tx) in tiles(e) {
-                self.start[ty * self.tiles_x + tx + 1] += 1;
+            let (ty0, ty1) = (e.y0 as usize / TILE, e.y1 as usize / TILE);
+            for ty in ty0..=ty1 {
+                self.start[ty + 1] += 1;
+                self.reached[ty * tx + e.x0 as usize / TILE..=ty * tx + e.x1 as usize / TILE].fill(true);
             }
         }
-        for i in 0..nt {
+        for i in 0..nb {
             self.start[i + 1] += self.start[i];
         }
         self.cursor.clear();
-        self.cursor.extend_from_slice(&self.start[..nt]);
+        self.cursor.extend_from_slice(&self.start[..nb]);
         self.items.clear();
-        self.items.resize(self.start[nt] as usize, 0);
+        self.items.resize(self.start[nb] as usize, 0);
         for (i, e) in self.edges.iter().enumerate() {
-            for (ty, tx) in tiles(e) {
-                let c = &mut self.cursor[ty * self.tiles_x + tx];
+            for ty in e.y0 as usize / TILE..=e.y1 as usize / TILE {
+                let c = &mut self.cursor[ty];
                 self.items[*c as usize] = i as u32;
                 *c += 1;
             }
@@ -54,7 +55,7 @@ impl EdgeSilhouette {
     }
 
     /// The tile pass, one band of `TILE` rows at a time: nearest accepted candidate per
-    /// pixel of the band's tiles that hold candidates, then their soft values and
+    /// pixel of the band's tiles that candidates reach, then their soft values and
     /// records in row-major order.
     pub(super) fn tile_pass(&mut self) {
         let (w, h) = (self.width as usize, self.height as usize);
@@ -62,11 +63,16 @@ impl EdgeSilhouette {
         let m = m2.sqrt();
         let inv_sigma = 1.0 / self.settings.sigma;
         let cov = &self.coverage.data;
-        // Whether the pixel centre nearest to q + n_out is background or off the canvas.
+        // Whether the pixel centre nearest to q + n_out is background or off the canvas:
+        // its cell ⌊r + ½⌋ + 1 in the coverage with a background border (`probe`),
+        // where clamping to the border keeps every cell off the canvas background.
+        let probe = &self.probe;
+        let (pw, pmx, pmy) = (w + 2, (w + 1) as f64, (h + 1) as f64);
         let accepted = |q: DVec2, out: DVec2| {
             let r = q + out;
-            let (x, y) = (floor_i64(r.x + 0.5), floor_i64(r.y + 0.5));
-            !((0..w as i64).contains(&x) && (0..h as i64).contains(&y)) || cov[y as usize * w + x as usize] == 0
+            let x = ((r.x + 0.5) + 1.0).clamp(0.0, pmx) as usize;
+            let y = ((r.y + 0.5) + 1.0).clamp(0.0, pmy) as usize;
+            probe[y * pw + x] == 0
         };
         let empty = Best { d2: m2, edge: NONE };
         self.band.resize(TILE * w, empty);
@@ -74,7 +80,7 @@ impl EdgeSilhouette {
             let row0 = ty * self.tiles_x;
             self.active.clear();
             self.active
-                .extend((0..self.tiles_x).filter(|&tx| self.start[row0 + tx] < self.start[row0 + tx + 1]));
+                .extend((0..self.tiles_x).filter(|&tx| self.reached[row0 + tx]));
             if self.active.is_empty() {
                 continue;
             }
@@ -86,35 +92,29 @@ impl EdgeSilhouette {
                     self.band[ly * w + x0..ly * w + (x0 + TILE).min(w)].fill(empty);
                 }
             }
-            for &tx in &self.active {
-                let ti = row0 + tx;
-                let x0 = tx * TILE;
-                let tx1 = (x0 + TILE).min(w) as i32 - 1;
-                let ty1 = (y0 + th) as i32 - 1;
-                for &k in &self.items[self.start[ti] as usize..self.start[ti + 1] as usize] {
-                    let e = &self.edges[k as usize];
-                    let (xl, xh) = (e.x0.max(x0 as i32), e.x1.min(tx1));
-                    for y in e.y0.max(y0 as i32)..=e.y1.min(ty1) {
-                        let yf = y as f64;
-                        let Some((xa, xb)) = line_band_span(e, yf, m, xl, xh) else {
-                            continue;
-                        };
-                        let row = &mut self.band[(y as usize - y0) * w..(y as usize - y0 + 1) * w];
-                        let row = &mut row[xa as usize..=xb as usize];
-                        if e.accept == Accept::Always {
-                            for (x, best) in (xa..=xb).zip(row) {
-                                let (_, _, d2) = e.eval(x as f64, yf);
-                                // Branch-free: minsd and a conditional move.
-                                let better = d2 < best.d2;
-                                best.edge = if better { k } else { best.edge };
-                                best.d2 = if better { d2 } else { best.d2 };
-                            }
-                        } else {
-                            for (x, best) in (xa..=xb).zip(row) {
-                                let (_, s, d2) = e.eval(x as f64, yf);
-                                if d2 < best.d2 && accepted(e.point(s), e.out) {
-                                    *best = Best { d2, edge: k };
-                                }
+            let ty1 = (y0 + th) as i32 - 1;
+            for &k in &self.items[self.start[ty] as usize..self.start[ty + 1] as usize] {
+                let e = &self.edges[k as usize];
+                for y in e.y0.max(y0 as i32)..=e.y1.min(ty1) {
+                    let yf = y as f64;
+                    let Some((xa, xb)) = line_band_span(e, yf, m, e.x0, e.x1) else {
+                        continue;
+                    };
+                    let row = &mut self.band[(y as usize - y0) * w..(y as usize - y0 + 1) * w];
+                    let row = &mut row[xa as usize..=xb as usize];
+                    if e.accept == Accept::Always {
+                        for (x, best) in (xa..=xb).zip(row) {
+                            let (_, _, d2) = e.eval(x as f64, yf);
+                            // Branch-free: minsd and a conditional move.
+                            let better = d2 < best.d2;
+                            best.edge = if better { k } else { best.edge };
+                            best.d2 = if better { d2 } else { best.d2 };
+                        }
+                    } else {
+                        for (x, best) in (xa..=xb).zip(row) {
+                            let (_, s, d2) = e.eval(x as f64, yf);
+                            if d2 < best.d2 && accepted(e.point(s), e.out) {
+                                *best = Best { d2, edge: k };
                             }
                         }
                     }
