@@ -67,12 +67,16 @@ impl EdgeSilhouette {
         // its cell ⌊r + ½⌋ + 1 in the coverage with a background border (`probe`),
         // where clamping to the border keeps every cell off the canvas background.
         let probe = &self.probe;
-        let (pw, pmx, pmy) = (w + 2, (w + 1) as f64, (h + 1) as f64);
+        let (pw, wf, hf) = (w + 2, w as f64, h as f64);
+        // ⌊v⌋ + 1 of v clamped to [−1, hi]: in [0, hi + 1], exact.
+        let cell = |v: f64, hi: f64| {
+            let v = v.clamp(-1.0, hi);
+            let t = v as i64;
+            (t - i64::from(t as f64 > v) + 1) as usize
+        };
         let accepted = |q: DVec2, out: DVec2| {
             let r = q + out;
-            let x = ((r.x + 0.5) + 1.0).clamp(0.0, pmx) as usize;
-            let y = ((r.y + 0.5) + 1.0).clamp(0.0, pmy) as usize;
-            probe[y * pw + x] == 0
+            probe[cell(r.y + 0.5, hf) * pw + cell(r.x + 0.5, wf)] == 0
         };
         let empty = Best { d2: m2, edge: NONE };
         self.band.resize(TILE * w, empty);
