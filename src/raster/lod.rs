@@ -20,25 +20,28 @@
 //! Choosing ([`DetailLevels::choose`], every render): a displacement δ of `e` model
 //! units (at pose scale s, `s·e` in the world) of a point at camera depth
 //! `z ≥ z_near` moves its projection by `(f/z)·(δ_xy − δ_z·(uv − c)/f)`, at most
-//! `s·e·√(f² + r²)/z_near` pixels, f the larger focal length and r the half-diagonal
-//! of the canvas (which bounds how far from the principal point a pixel that matters
-//! can be), `z_near` the depth of a sphere about the bounds' centre holding every
-//! vertex. The tolerance is the levels' tolerance t at σ ≥ 1 px² and `t·σ` below
-//! (σ in px²): the blurred coarse stages of a fit may use coarse levels, the sharp
+//! `s·e·√(f² + r²)/(z_near − s·e)` pixels (the moved point may be `s·e` nearer), f
+//! the larger focal length and r a bound on how far from the principal point c a
+//! pixel that matters lies: the farther of the canvas corners, or of the projected
+//! corners of the mesh's bounding box (whose hull holds the object's image) if
+//! nearer, plus the tolerance. `z_near` is the deeper of two lower bounds on the
+//! vertices' depth: a sphere about the bounds' centre holding every vertex, and the
+//! box's 8 corners. The tolerance is the levels' tolerance t at σ ≥ 1 px² and `t·σ`
+//! below (σ in px²): the blurred coarse stages of a fit may use coarse levels, the sharp
 //! last ones — whose fits are precise to a tenth of a pixel — render the mesh itself
 //! or nearly. (`t·√σ`, the blur's length, was measured too: as accurate on fits from
 //! no pose, but refits from a good pose lost precision, and the next-best-view check
 //! fell from 76 % to 67 %; BENCHMARKS.md.) The coarsest level whose error moves the
 //! silhouette by at most the tolerance is used; none (the mesh itself) when the
-//! sphere reaches behind the camera or the tolerance is 0. The choice is piecewise
-//! constant in the pose: within one level the render and its gradient are exact for
-//! that level's mesh.
+//! sphere and the box both reach behind the camera or the tolerance is 0. The choice
+//! is piecewise constant in the pose: within one level the render and its gradient
+//! are exact for that level's mesh.
 
 use crate::camera::Camera;
 use crate::mesh::Mesh;
 use crate::pose::Pose;
 use crate::raster::edge::EdgeTopology;
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use meshoptimizer_rs::{simplify, Positions, SimplifyOptions, SimplifySettings, Workspace};
 use std::collections::{HashMap, HashSet};
 use std::sync::OnceLock;
@@ -91,6 +94,8 @@ pub struct DetailLevels {
     /// vertices (model frame).
     centre: DVec3,
     radius: f64,
+    /// The corners of the mesh's bounding box (model frame).
+    corners: [DVec3; 8],
     /// The tolerance, pixels (0: never simplified).
     tolerance_px: f64,
 }
@@ -142,6 +147,14 @@ impl DetailLevels {
             bounds,
             centre,
             radius,
+            corners: std::array::from_fn(|i| {
+                let pick = |bit: usize, lo: f64, hi: f64| if i >> bit & 1 == 1 { hi } else { lo };
+                DVec3::new(
+                    pick(0, b.min.x, b.max.x),
+                    pick(1, b.min.y, b.max.y),
+                    pick(2, b.min.z, b.max.z),
+                )
+            }),
             tolerance_px,
         }
     }
@@ -191,14 +204,40 @@ impl DetailLevels {
             return None;
         }
         let s = pose.scale.abs().max_element();
-        let z = camera.to_camera(pose.apply(self.centre)).z - s * self.radius;
-        let f = camera.fx.abs().max(camera.fy.abs());
-        let reach = f.hypot(0.5 * f64::from(camera.width).hypot(f64::from(camera.height)));
-        let px_per_unit = s * reach / z;
-        if !(z > 0.0 && px_per_unit.is_finite()) {
+        // Nearest depth: the sphere's and the box's (its 8 corners), whichever is deeper
+        // (both hold every vertex).
+        let to_cam = |p: DVec3| camera.to_camera(pose.apply(p));
+        let corners = self.corners.map(to_cam);
+        let z_box = corners.iter().map(|c| c.z).fold(f64::INFINITY, f64::min);
+        let z_near = (to_cam(self.centre).z - s * self.radius).max(z_box);
+        if z_near.is_nan() || z_near <= 0.0 {
             return None;
         }
-        let k = self.bounds.iter().rposition(|&e| e * px_per_unit <= tolerance)?;
+        // How far from the principal point a pixel that matters lies: within the canvas
+        // and, when every box corner is in front, the hull of their projections.
+        let c = DVec2::new(camera.cx, camera.cy);
+        let (w, h) = (f64::from(camera.width), f64::from(camera.height));
+        let canvas = [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
+            .map(|(x, y)| (DVec2::new(x - 0.5, y - 0.5) - c).length())
+            .into_iter()
+            .fold(0.0, f64::max);
+        let hull = if z_box > 0.0 {
+            corners
+                .iter()
+                .map(|p| (camera.project(*p) - c).length())
+                .fold(0.0, f64::max)
+        } else {
+            f64::INFINITY
+        };
+        let r = canvas.min(hull) + tolerance;
+        let f = camera.fx.abs().max(camera.fy.abs());
+        let reach = f.hypot(r);
+        // A point at depth ≥ z_near moved by at most s·e lies at depth ≥ z_near − s·e.
+        let moved = |e: f64| s * e * reach / (z_near - s * e);
+        let k = self
+            .bounds
+            .iter()
+            .rposition(|&e| s * e < z_near && moved(e) <= tolerance)?;
         self.level(k)
     }
 }
@@ -422,6 +461,43 @@ mod tests {
             }
             assert!(used >= 3, "tolerance {tolerance}: levels chosen in only {used} renders");
         }
+    }
+
+    #[test]
+    fn a_long_object_seen_side_on_gets_coarser_levels_that_stay_within_the_tolerance() {
+        // Stretched 4× along x and seen nearly along z, its sphere reaches far nearer the
+        // camera than any vertex, and its image fills a small part of the canvas: the
+        // box's depth and the image's extent choose coarser levels than the sphere and
+        // the canvas alone would, and they still move the silhouette by ≤ the tolerance.
+        let mesh = blob_mesh(52, 100);
+        let tolerance = 0.5;
+        let d = DetailLevels::build(&mesh, &EdgeTopology::from_mesh(&mesh), tolerance);
+        let pose = Pose {
+            scale: DVec3::new(4.0, 1.0, 1.0),
+            ..Pose::IDENTITY
+        };
+        let mut coarser = 0;
+        for z in [9.0, 14.0, 24.0] {
+            let cam = Camera::look_at(DVec3::new(0.0, 0.15, z), DVec3::ZERO, DVec3::Y, 256, 256, 150.0);
+            // The sphere-and-canvas rule (the previous one), as a reference.
+            let zc = cam.to_camera(pose.apply(d.centre)).z;
+            let reach = 150.0f64.hypot(0.5 * 256f64.hypot(256.0));
+            let old = (0..d.len()).rposition(|k| 4.0 * d.bound(k) * reach / (zc - 4.0 * d.radius) <= tolerance);
+            let Some(level) = d.choose(&pose, &cam, 1.0) else {
+                continue;
+            };
+            let k = (0..d.len())
+                .find(|&k| d.level(k).is_some_and(|l| std::ptr::eq(l, level)))
+                .unwrap();
+            assert!(old.is_none_or(|o| k >= o), "z {z}: level {k} finer than {old:?}");
+            coarser += usize::from(old.is_none_or(|o| k > o));
+            let full = hard::render(&mesh, &pose, &cam);
+            let coarse = hard::render(&level.mesh, &pose, &cam);
+            let changed = full.data.iter().zip(&coarse.data).filter(|(a, b)| a != b).count();
+            let bound = (tolerance * boundary(&full) as f64).ceil() as usize + 2;
+            assert!(changed <= bound, "z {z}: {changed} pixels changed, bound {bound}");
+        }
+        assert!(coarser >= 2, "coarser in only {coarser} of 3 views");
     }
 
     #[test]
