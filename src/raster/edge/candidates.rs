@@ -149,7 +149,8 @@ impl EdgeSilhouette {
     }
 
     /// One pass over the edges: the candidates (present faces on one side) and, with
-    /// `CHAIN`, each edge's net weight in the coverage's counters.
+    /// `CHAIN`, each edge's net weight in the coverage's counters. (Kept out of line,
+    /// so that profiles show it apart from the tile pass.)
     #[inline(never)]
     fn edge_pass<const CHAIN: bool>(&mut self, topo: &EdgeTopology) {
         self.candidates.clear();
