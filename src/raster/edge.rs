@@ -109,8 +109,6 @@ pub struct EdgeSilhouette {
     sat: Vec<u32>,
     /// Per pixel, whether it is `DEEP` pixels inside the coverage (`candidates.rs`).
     deep: Vec<u8>,
-    /// The coverage inside a one-pixel background border, `(w + 2) × (h + 2)`.
-    probe: Vec<u8>,
     /// The edges with a non-zero net weight or many faces (`candidates.rs`).
     busy: Vec<u32>,
     /// Edges whose present faces lie on one side, before their setup.
@@ -154,7 +152,6 @@ impl EdgeSilhouette {
             diff: Vec::new(),
             sat: Vec::new(),
             deep: Vec::new(),
-            probe: Vec::new(),
             busy: Vec::new(),
             candidates: Vec::new(),
             edges: Vec::new(),

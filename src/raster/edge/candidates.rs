@@ -311,9 +311,8 @@ impl EdgeSilhouette {
     }
 
     /// The summed-area table of the coverage: `sat[(y + 1)(w + 1) + x + 1]` counts the
-    /// covered pixels in columns `0..=x` of rows `0..=y`; the pixels [`DEEP`] deep
-    /// (every pixel within `DEEP` columns and rows covered, all on the canvas); and the
-    /// coverage inside a one-pixel background border (`probe`, for the tile pass).
+    /// covered pixels in columns `0..=x` of rows `0..=y`; and the pixels [`DEEP`] deep
+    /// (every pixel within `DEEP` columns and rows covered, all on the canvas).
     fn build_sat(&mut self) {
         let (w, h) = (self.width as usize, self.height as usize);
         let stride = w + 1;
@@ -325,13 +324,6 @@ impl EdgeSilhouette {
                 run += u32::from(self.coverage.data[y * w + x] != 0);
                 self.sat[(y + 1) * stride + x + 1] = self.sat[y * stride + x + 1] + run;
             }
-        }
-        // The coverage inside a one-pixel background border (the tile pass's probes).
-        self.probe.clear();
-        self.probe.resize((w + 2) * (h + 2), 0);
-        for y in 0..h {
-            let row = (y + 1) * (w + 2) + 1;
-            self.probe[row..row + w].copy_from_slice(&self.coverage.data[y * w..(y + 1) * w]);
         }
         let d = DEEP as usize;
         let full = ((2 * d + 1) * (2 * d + 1)) as u32;

@@ -63,20 +63,11 @@ impl EdgeSilhouette {
         let m = m2.sqrt();
         let inv_sigma = 1.0 / self.settings.sigma;
         let cov = &self.coverage.data;
-        // Whether the pixel centre nearest to q + n_out is background or off the canvas:
-        // its cell ⌊r + ½⌋ + 1 in the coverage with a background border (`probe`),
-        // where clamping to the border keeps every cell off the canvas background.
-        let probe = &self.probe;
-        let (pw, wf, hf) = (w + 2, w as f64, h as f64);
-        // ⌊v⌋ + 1 of v clamped to [−1, hi]: in [0, hi + 1], exact.
-        let cell = |v: f64, hi: f64| {
-            let v = v.clamp(-1.0, hi);
-            let t = v as i64;
-            (t - i64::from(t as f64 > v) + 1) as usize
-        };
+        // Whether the pixel centre nearest to q + n_out is background or off the canvas.
         let accepted = |q: DVec2, out: DVec2| {
             let r = q + out;
-            probe[cell(r.y + 0.5, hf) * pw + cell(r.x + 0.5, wf)] == 0
+            let (x, y) = (floor_i64(r.x + 0.5), floor_i64(r.y + 0.5));
+            !((0..w as i64).contains(&x) && (0..h as i64).contains(&y)) || cov[y as usize * w + x as usize] == 0
         };
         let empty = Best { d2: m2, edge: NONE };
         self.band.resize(TILE * w, empty);
