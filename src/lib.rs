@@ -32,9 +32,9 @@ mod estimator;
 mod mask;
 mod mesh;
 mod pose;
-mod result;
 mod verdict;
 mod view;
+mod window;
 
 pub mod app;
 pub mod io;
@@ -51,13 +51,14 @@ pub mod wasm;
 pub use camera::{Camera, CameraJson, Convention, MAX_SIDE};
 pub use error::{Error, Result};
 pub use estimator::{
-    robust_weights, CameraCorrection, CameraPrior, CameraTest, Estimator, FitSettings, Phase, Progress, Request,
-    Response, ScaleMode, Shard, Termination, ViewFigures, OBJECT_MARGIN,
+    robust_weights, CameraCorrection, CameraPrior, CameraTest, Estimator, FitResult, FitSettings, FitSetup, Phase,
+    PoseOut, Progress, Request, Response, Shard, Termination, ViewFigures, ViewResult, OBJECT_MARGIN,
 };
 pub use io::scene::{load_scene, Scene, SceneJson, ViewJson};
 pub use mask::Mask;
 pub use mesh::{Bounds, Mesh};
-pub use pose::{mat3_from_rows, mat3_to_rows, mat4_from_rows, mat4_to_rows, Pose, PoseJson, RotationJson};
-pub use result::{FitResult, PoseOut, ViewResult};
+pub use optim::params::ScaleMode;
+pub use pose::{mat3_from_rows, mat3_to_rows, mat4_from_rows, mat4_to_rows, Mat9, Pose, PoseJson, RotationJson, Vec9};
 pub use verdict::{judge, Judgement, Verdict, VerdictThresholds};
 pub use view::{Rgba, View, ViewSources};
+pub use window::{Window, WindowMode};

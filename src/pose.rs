@@ -5,7 +5,16 @@
 use crate::error::{Error, Result};
 use crate::so3;
 use glam::{DMat3, DMat4, DQuat, DVec3};
+use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
+
+/// The pose's tangent dimension: `[ω (3), t (3), log s (3)]`.
+pub const POSE_DIM: usize = 9;
+/// A 9×9 matrix in pose coordinates `[ω, t, log s]` (curvatures, covariances): the one
+/// 9×9 type of the crate.
+pub type Mat9 = SMatrix<f64, POSE_DIM, POSE_DIM>;
+/// A 9-vector in pose coordinates `[ω, t, log s]`.
+pub type Vec9 = SVector<f64, POSE_DIM>;
 
 /// Rotation, translation and per-axis scale of the object in the world.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -36,6 +45,16 @@ impl Pose {
     #[inline]
     pub fn apply(&self, p: DVec3) -> DVec3 {
         self.rotation * (self.scale * p) + self.translation
+    }
+
+    /// The pose moved by `d` in `[ω, t, log s]`: `R·exp([ω]×)`, `t + δt`, `s ⊙ exp(δlog s)`
+    /// (ω the right tangent, as every gradient and covariance of the crate).
+    pub fn perturbed(&self, d: &Vec9) -> Pose {
+        Pose {
+            rotation: so3::orthonormalize(self.rotation * so3::exp(DVec3::new(d[0], d[1], d[2]))),
+            translation: self.translation + DVec3::new(d[3], d[4], d[5]),
+            scale: self.scale * DVec3::new(d[6], d[7], d[8]).exp(),
+        }
     }
 
     /// The 4×4 object-to-world matrix `[R·diag(s) | t]`.

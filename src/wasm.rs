@@ -73,7 +73,7 @@ export interface Progress {
   view_iou: number[];
   /** Hard IoU per view at full resolution, at `pose`. */
   iou: number[];
-  termination: null | "converged" | "max_iterations" | "stalled";
+  termination: null | "converged" | "completed" | "stalled";
   /** The verdict once the fit is done: "ok", "poor" or "failed" (a failed fit is never "converged"). */
   verdict: null | "ok" | "poor" | "failed";
   /** Why the verdict is not "ok", one line each; the views it doubts. */
@@ -115,7 +115,7 @@ export interface FitResult {
   pose: PoseOut; matrix: number[][];
   views: { name: string; iou: number; hausdorff_px: number }[];
   mean_iou: number; loss_history: number[]; iterations: number;
-  termination: null | "converged" | "max_iterations" | "stalled";
+  termination: null | "converged" | "completed" | "stalled";
   /** "ok", "poor" or "failed", with the reasons and the views it doubts. */
   verdict: null | "ok" | "poor" | "failed"; verdict_reasons: string[]; doubted_views: string[];
   /** The pose covariance once done: 9×9 rows in [ω (rad; right tangent, R_true ≈ R·exp([ω]×)), t (scene units), log s]. */

@@ -263,7 +263,7 @@ function statusText(p) {
   const secs = `${p.seconds.toFixed(2)} s`;
   if (p.done) {
     // A failed fit is never "converged": the verdict comes first.
-    const why = p.termination.replace('_', ' ');
+    const why = { converged: 'converged', completed: 'schedule completed', stalled: 'stalled, best pose kept' }[p.termination] ?? p.termination;
     return `done — verdict ${p.verdict} (${why}) in ${p.iteration} iterations, ${secs}`;
   }
   const prefix = state === 'paused' ? 'paused — ' : state === 'ready' && p.iteration === 0 && p.searched === 0 ? 'ready — ' : '';

@@ -97,7 +97,7 @@ pub fn coverage_case(mesh: &Mesh, seed: u64, scenes: &CoverageScenes) -> Result<
     Ok(Some(CoverageCase {
         seed,
         views,
-        mahalanobis_sq: mahalanobis_sq(cov, &e, est.free())?,
+        mahalanobis_sq: mahalanobis_sq(cov, &e, est.settings().scale_mode)?,
         add: metrics::add(mesh, &pose, &scene.pose),
         add_95: u.std_dev.add_95,
         rotation_deg: metrics::rotation_error_deg(&pose, &scene.pose),
@@ -289,7 +289,7 @@ impl NextViewSetup {
         let model = crate::raster::silhouette::RenderMesh::new(mesh.clone());
         setup.cameras = candidate_viewpoints(&model, &setup.views, &setup.fitted, candidates, shell)?;
         setup.ranked = est
-            .suggest_views(Some(&setup.cameras))?
+            .suggest_views(Some(&setup.cameras), shell)?
             .iter()
             .filter(|r| r.predicted_add_rms.is_finite())
             .map(|r| r.index)

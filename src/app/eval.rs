@@ -12,7 +12,7 @@
 //! threshold τ when its IoU with the mask exceeds τ. Precision = TP / predictions,
 //! recall = TP / ground-truth objects, F1 = 2PR / (P + R).
 
-use crate::result::FitResult;
+use crate::estimator::FitResult;
 use serde::{Deserialize, Serialize};
 
 /// One scene's outcome.
@@ -253,8 +253,8 @@ pub fn report_markdown(summary: &Summary, outcomes: &[SceneOutcome]) -> String {
 mod tests {
     use super::*;
     use crate::estimator::Termination;
+    use crate::estimator::{PoseOut, ViewResult};
     use crate::metrics::PoseErrors;
-    use crate::result::{PoseOut, ViewResult};
     use crate::verdict::Verdict;
 
     fn outcome(ious: &[f64], areas: &[usize], add_rel: f64) -> SceneOutcome {
@@ -282,12 +282,14 @@ mod tests {
                         name: "v".into(),
                         iou,
                         hausdorff_px: 1.0,
+                        weight: 1.0,
                     })
                     .collect(),
                 mean_iou: ious.iter().sum::<f64>() / ious.len() as f64,
                 loss_history: vec![],
                 iterations: 1,
                 termination: Some(Termination::Converged),
+                scale_mode: crate::ScaleMode::Anisotropic,
                 verdict: Some(Verdict::Ok),
                 verdict_reasons: vec![],
                 doubted_views: vec![],

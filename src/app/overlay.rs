@@ -92,7 +92,7 @@ pub fn overlay_with(view: &View, rendered: Option<&Mask>, style: &OverlayStyle) 
 /// the window camera (e.g. grasp rectangles).
 pub fn overlay_window(
     view: &View,
-    window: &crate::loss::target::Window,
+    window: &crate::window::Window,
     size: u32,
     posed: Option<(&crate::mesh::Mesh, &crate::pose::Pose)>,
     style: &OverlayStyle,
@@ -293,7 +293,7 @@ mod tests {
 
     #[test]
     fn window_overlay_shows_the_object_large() {
-        use crate::loss::target::{Window, WindowMode};
+        use crate::window::{Window, WindowMode};
         let mesh = crate::app::synth::blob_mesh(8, 12);
         let s = crate::app::synth::synthesize(
             &mesh,

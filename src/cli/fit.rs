@@ -34,6 +34,17 @@ pub enum ScaleArg {
     Fixed,
 }
 
+impl ScaleArg {
+    /// The library's scale mode.
+    pub fn mode(self) -> ScaleMode {
+        match self {
+            ScaleArg::Anisotropic => ScaleMode::Anisotropic,
+            ScaleArg::Isotropic => ScaleMode::Isotropic,
+            ScaleArg::Fixed => ScaleMode::Fixed,
+        }
+    }
+}
+
 /// Options shared by `fit` and `eval`; each left out takes the library's default.
 #[derive(Args, Clone, Debug)]
 pub struct FitOptions {
@@ -146,16 +157,12 @@ impl FitOptions {
             };
         }
         if let Some(m) = self.scale {
-            s.scale_mode = match m {
-                ScaleArg::Anisotropic => ScaleMode::Anisotropic,
-                ScaleArg::Isotropic => ScaleMode::Isotropic,
-                ScaleArg::Fixed => ScaleMode::Fixed,
-            };
+            s.scale_mode = m.mode();
         }
         if let Some(w) = self.window {
             s.window = match w {
                 WindowArg::Object => s.window_object_default(),
-                WindowArg::Full => localisebot::loss::target::WindowMode::Full,
+                WindowArg::Full => localisebot::WindowMode::Full,
             };
         }
         if self.refine_cameras {
@@ -283,7 +290,7 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
     }
     let verdict = result.verdict.unwrap_or(Verdict::Failed);
     let mut line = format!(
-        "{}: verdict {} — mean IoU {:.4} in {:.2} s (search {:.2} s, stages {} s; {} iterations, {:?})",
+        "{}: verdict {} — mean IoU {:.4} in {:.2} s (search {:.2} s, stages {} s; {} iterations, {})",
         a.out.display(),
         verdict.as_str(),
         result.mean_iou,
@@ -291,7 +298,7 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
         search_s,
         stage_s.iter().map(|s| format!("{s:.2}")).collect::<Vec<_>>().join("/"),
         result.iterations,
-        result.termination
+        result.termination.map_or("not finished", |t| t.describe())
     );
     if let Some(e) = &result.errors {
         line += &format!(

@@ -5,10 +5,10 @@
 
 use super::files::{load_pose, load_scene_file, to_json, CliResult};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
-use localisebot::loss::target::Window;
 use localisebot::raster::silhouette::RenderMesh;
 use localisebot::raster::soft::SoftSettings;
 use localisebot::FitSettings;
+use localisebot::Window;
 use std::path::PathBuf;
 
 /// Arguments of `loss`.

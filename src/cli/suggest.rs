@@ -10,11 +10,8 @@
 use super::files::{load_pose, load_scene_file, read_text, to_json, CliResult};
 use super::fit::ScaleArg;
 use clap::Args;
-use localisebot::loss::target::Window;
-use localisebot::optim::lm::Free;
-use localisebot::raster::silhouette::RenderMesh;
-use localisebot::uncertainty::{candidate_viewpoints, next_view::SPHERE, suggest_views, NoiseModel, Viewpoints};
-use localisebot::{Camera, CameraJson, FitSettings};
+use localisebot::uncertainty::Viewpoints;
+use localisebot::{Camera, CameraJson, FitResult, FitSettings, FitSetup, ScaleMode};
 use std::path::{Path, PathBuf};
 
 /// `suggest-view`'s arguments.
@@ -22,8 +19,9 @@ use std::path::{Path, PathBuf};
 pub struct SuggestArgs {
     /// The scene file that was fitted.
     pub scene: PathBuf,
-    /// The fit's result file (or a pose file): the pose to plan from. Views its
-    /// verdict doubts are left out.
+    /// The fit's result file (or a pose file): the pose to plan from, with the views
+    /// weighted as the fit weighted them (a view it set aside is left out) and its
+    /// scale mode.
     pub result: PathBuf,
     /// Candidate cameras: a JSON list of camera objects (scene-file form), or of
     /// objects with a "camera" key, or a scene file whose views' cameras are taken.
@@ -37,8 +35,9 @@ pub struct SuggestArgs {
     /// How many cameras to print (default 3).
     #[arg(long, default_value_t = 3)]
     pub top: usize,
-    /// The scale the fit estimated, as `fit --scale` (default anisotropic): a scale
-    /// that was not fitted is not uncertain, and no photograph is chosen to pin it.
+    /// The scale the fit estimated, as `fit --scale` (default: the result's; a pose
+    /// file's: anisotropic): a scale that was not fitted is not uncertain, and no
+    /// photograph is chosen to pin it.
     #[arg(long, value_enum)]
     pub scale: Option<ScaleArg>,
 }
@@ -56,57 +55,30 @@ pub enum ViewpointsArg {
 pub fn run(a: &SuggestArgs) -> CliResult<()> {
     let scene = load_scene_file(&a.scene)?;
     let pose = load_pose(&a.result)?;
-    let doubted = doubted_views(&a.result)?;
+    let fit = fit_of(&a.result, &scene.views)?;
     if a.candidates.is_some() && a.viewpoints.is_some() {
         return Err(
             "suggest-view: --viewpoints chooses the default candidates; it cannot be used with --candidates".into(),
         );
     }
     let given = a.candidates.is_some();
-    let model = RenderMesh::new(scene.mesh.clone());
-    let candidates = match &a.candidates {
-        Some(p) => load_cameras(p)?,
-        None => {
-            let shell = match a.viewpoints {
-                None | Some(ViewpointsArg::Sphere) => Viewpoints::Sphere,
-                Some(ViewpointsArg::Above) => Viewpoints::Above,
-            };
-            candidate_viewpoints(&model, &scene.views, &pose, SPHERE, shell)
-                .map_err(|e| format!("{}: {e}", a.scene.display()))?
-        }
+    let candidates = a.candidates.as_deref().map(load_cameras).transpose()?;
+    let shell = match a.viewpoints {
+        None | Some(ViewpointsArg::Sphere) => Viewpoints::Sphere,
+        Some(ViewpointsArg::Above) => Viewpoints::Above,
     };
-    let settings = FitSettings::default();
-    let windows: Vec<Window> = scene
-        .views
-        .iter()
-        .map(|v| Window::for_view(v, settings.window))
-        .collect();
-    let weights: Vec<f64> = scene
-        .views
-        .iter()
-        .map(|v| {
-            if doubted.iter().any(|d| d == v.name()) {
-                0.0
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let ranked = suggest_views(
-        &model,
-        &scene.views,
-        &windows,
-        &pose,
-        &weights,
-        match a.scale {
-            None | Some(ScaleArg::Anisotropic) => Free::All,
-            Some(ScaleArg::Isotropic) => Free::IsotropicScale,
-            Some(ScaleArg::Fixed) => Free::NoScale,
+    let settings = FitSettings {
+        scale_mode: match a.scale {
+            Some(s) => s.mode(),
+            None => fit.scale_mode,
         },
-        Some(&candidates),
-        &NoiseModel::default(),
-    )
-    .map_err(|e| format!("{}: {e}", a.scene.display()))?;
+        ..FitSettings::default()
+    };
+    let in_scene = |e: localisebot::Error| format!("{}: {e}", a.scene.display());
+    let setup = FitSetup::new(scene.mesh, scene.views, settings).map_err(in_scene)?;
+    let ranked = setup
+        .suggest_views(&pose, &fit.weights, candidates.as_deref(), shell)
+        .map_err(in_scene)?;
     let usable: Vec<_> = ranked.iter().filter(|r| r.predicted_add_rms.is_finite()).collect();
     if usable.is_empty() {
         return Err(format!(
@@ -119,10 +91,10 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
     eprintln!(
         "{} candidates ({}), {} see the whole object; expected RMS ADD now {:.4e}",
         ranked.len(),
-        match (given, a.viewpoints) {
+        match (given, shell) {
             (true, _) => "given",
-            (false, None | Some(ViewpointsArg::Sphere)) => "sphere",
-            (false, Some(ViewpointsArg::Above)) => "upper half-sphere",
+            (false, Viewpoints::Sphere) => "sphere",
+            (false, Viewpoints::Above) => "upper half-sphere",
         },
         usable.len(),
         ranked[0].current_add_rms
@@ -142,15 +114,41 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
     Ok(())
 }
 
-/// The views a result file's verdict doubts (none for a pose file).
-fn doubted_views(path: &Path) -> CliResult<Vec<String>> {
+/// What `suggest-view` plans with from the fit: each view's weight and the scale mode.
+struct FitOf {
+    weights: Vec<f64>,
+    scale_mode: ScaleMode,
+}
+
+/// The views' weights and the scale mode of a result file (a pose file: every view
+/// weighs 1, anisotropic scale). A result names its views; a view it does not name
+/// is refused, since the result is then another scene's.
+fn fit_of(path: &Path, views: &[localisebot::View]) -> CliResult<FitOf> {
     let text = read_text(path)?;
-    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(value
-        .get("doubted_views")
-        .and_then(|d| d.as_array())
-        .map(|a| a.iter().filter_map(|v| v.as_str().map(str::to_string)).collect())
-        .unwrap_or_default())
+    let name = path.display();
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{name}: {e}"))?;
+    if value.get("views").is_none() {
+        return Ok(FitOf {
+            weights: vec![1.0; views.len()],
+            scale_mode: ScaleMode::Anisotropic,
+        });
+    }
+    let result: FitResult = serde_json::from_value(value).map_err(|e| format!("{name}: not a result file: {e}"))?;
+    let weights = views
+        .iter()
+        .map(|v| {
+            result
+                .views
+                .iter()
+                .find(|r| r.name == v.name())
+                .map(|r| r.weight)
+                .ok_or_else(|| format!("{name}: the result has no view \"{}\" of the scene", v.name()))
+        })
+        .collect::<CliResult<Vec<f64>>>()?;
+    Ok(FitOf {
+        weights,
+        scale_mode: result.scale_mode,
+    })
 }
 
 /// Cameras from a JSON list (of cameras or of objects with "camera") or a scene file.

@@ -43,13 +43,14 @@
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::loss::objective::{Objective, ObjectiveSettings};
-use crate::loss::target::Window;
-use crate::optim::lm::Free;
+use crate::optim::lm::Lm;
+use crate::optim::params::ScaleMode;
 use crate::pose::{mat4_to_rows, Pose};
+use crate::pose::{Mat9, Vec9};
 use crate::raster::silhouette::RenderMesh;
 use crate::so3;
-use crate::uncertainty::{free_basis, perturb, Mat9, Vec9};
 use crate::view::View;
+use crate::window::Window;
 use glam::{DMat3, DVec3};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -235,7 +236,7 @@ pub(super) fn refine(
     windows: &[Window],
     weights: &[f64],
     pose: Pose,
-    free: Free,
+    mode: ScaleMode,
     resolution: u32,
     settings: ObjectiveSettings,
     prior: &CameraPrior,
@@ -268,7 +269,7 @@ pub(super) fn refine(
             [a, a, a, b, b, b]
         })
         .collect();
-    let p = free_basis(free);
+    let p = mode.basis();
     let k = p.ncols();
     let gauge = gauge_basis(&cams);
     let m = gauge.ncols();
@@ -290,7 +291,7 @@ pub(super) fn refine(
             }
             let (ev, ne) = objectives[v].normal_equations(model, pose)?;
             loss += wn[v] * ev.total;
-            let hv = DMatrix::from_fn(9, 9, |i, j| ne.jtj[i][j]) * wn[v];
+            let hv = DMatrix::from_fn(9, 9, |i, j| ne.jtj[(i, j)]) * wn[v];
             let gv = DVector::from_fn(9, |i, _| ne.jtr[i]) * wn[v];
             let kv = pose_of_twist(pose, r, -(r.transpose() * t));
             let hk = &hv * &kv;
@@ -331,51 +332,34 @@ pub(super) fn refine(
         })
     };
 
-    let mut pose = pose;
-    let mut eta = DVector::zeros(6 * n);
-    let mut current = evaluate(&pose, &eta, &mut temperature)?;
+    // The one LM loop (`crate::optim::lm`) over points (pose, η).
+    let mut point = (pose, DVector::zeros(6 * n));
+    let first = evaluate(&point.0, &point.1, &mut temperature)?;
     if !(temperature.is_finite() && temperature > 0.0) {
         return Err(Error::Settings(
             "camera correction: the pose's uncertainty gives no temperature".into(),
         ));
     }
-    let start_cost = current.cost;
-    let mut lambda = 1e-3;
-    let mut since = 0;
-    for _ in 0..ITERATIONS {
-        let dim = current.h.nrows();
-        let mut damped = current.h.clone();
-        for i in 0..dim {
-            damped[(i, i)] += lambda * current.h[(i, i)].max(1e-12);
+    let start_cost = first.cost;
+    let step = |(pose, eta): &(Pose, DVector<f64>), d: &DVector<f64>| {
+        let full = &basis * d;
+        let next_pose = pose.perturbed(&Vec9::from_fn(|i, _| full[i]));
+        let next_eta = eta + full.rows(9, 6 * n);
+        (next_pose.validate().is_ok() && next_eta.iter().all(|v| v.is_finite())).then_some((next_pose, next_eta))
+    };
+    let mut lm = Lm::new();
+    let mut current = first;
+    for i in 0..ITERATIONS {
+        point = lm.next(point, current.cost, current.h, current.g, step);
+        if lm.stalled() || i + 1 == ITERATIONS {
+            break;
         }
-        let Some(step) = damped.cholesky().map(|c| c.solve(&(-&current.g))) else {
-            lambda *= 10.0;
-            continue;
-        };
-        let full = &basis * &step;
-        let d_pose = Vec9::from_fn(|i, _| full[i]);
-        let next_pose = perturb(&pose, &d_pose);
-        let next_eta = &eta + full.rows(9, 6 * n);
-        let next = evaluate(&next_pose, &next_eta, &mut temperature)?;
-        if next.cost < current.cost {
-            let gain = (current.cost - next.cost) / current.cost.abs().max(1e-300);
-            pose = next_pose;
-            eta = next_eta;
-            current = next;
-            lambda = (lambda / 3.0).max(1e-9);
-            since = if gain < 1e-5 { since + 1 } else { 0 };
-            if since >= 3 {
-                break;
-            }
-        } else {
-            lambda *= 4.0;
-            if lambda > 1e6 {
-                break;
-            }
-        }
+        current = evaluate(&point.0, &point.1, &mut temperature)?;
     }
-    // Leave the objectives' cameras as the final corrections are (for the figures).
-    let _ = evaluate(&pose, &eta, &mut temperature)?;
+    // The best point; its evaluation leaves the objectives' cameras as the final
+    // corrections are (for the figures), and gives its model for the covariance.
+    let (pose, eta) = lm.best().map(|(p, _)| p.clone()).unwrap_or(point);
+    let current = evaluate(&pose, &eta, &mut temperature)?;
 
     // The covariance the cameras' freedom adds: T·([H⁻¹]_θθ − H_θθ⁻¹), free directions.
     let extra = {
@@ -461,7 +445,7 @@ mod tests {
                     ..cam
                 };
                 let d = Vec9::from_fn(|i, _| sign * k[(i, j)] * h);
-                let moved_pose = perturb(&pose, &d);
+                let moved_pose = pose.perturbed(&d);
                 pts.map(|p| {
                     (
                         moved_cam.project(moved_cam.to_camera(pose.apply(p))),

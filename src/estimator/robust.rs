@@ -1,23 +1,14 @@
 //! Occlusion without an ignore mask (SPEC §4): the views' robust weights and the
 //! leave-one-out consensus test, and the short Levenberg–Marquardt fits they use.
 
-use super::settings::ScaleMode;
-use super::Track;
+use super::refine::Track;
 use crate::error::Result;
 use crate::loss::objective::Objective;
-use crate::optim::lm::{self, Free, Lm};
-use crate::optim::params;
+use crate::metrics::median;
+use crate::optim::lm::Lm;
+use crate::optim::params::ScaleMode;
 use crate::pose::Pose;
 use crate::raster::silhouette::RenderMesh;
-
-/// The LM parameters a scale mode frees.
-pub(super) fn free_parameters(mode: ScaleMode) -> Free {
-    match mode {
-        ScaleMode::Fixed => Free::NoScale,
-        ScaleMode::Isotropic => Free::IsotropicScale,
-        ScaleMode::Anisotropic => Free::All,
-    }
-}
 
 /// Levenberg–Marquardt iterations of `objective` from `start`; the best pose and loss.
 pub(super) fn polish(
@@ -25,22 +16,19 @@ pub(super) fn polish(
     mesh: &RenderMesh,
     start: Pose,
     iterations: usize,
-    free: Free,
+    mode: ScaleMode,
     radius: f64,
 ) -> Result<(Pose, f64)> {
     let mut lm = Lm::new();
-    let (mut pose, mut best) = (start, (start, f64::INFINITY));
+    let mut pose = start;
     for _ in 0..iterations {
-        let (ev, ne) = objective.normal_equations(mesh, &pose)?;
-        if ev.total < best.1 {
-            best = (pose, ev.total);
+        let (_, ne) = objective.normal_equations(mesh, &pose)?;
+        pose = lm.next_pose(pose, &ne, mode, radius * pose.scale.max_element());
+        if lm.stalled() {
+            break;
         }
-        let length = radius * pose.scale.max_element();
-        pose = lm.next_pose(pose, lm::scale_equations(&ne, length), free, |p, d| {
-            params::apply(p, d, length)
-        });
     }
-    Ok(best)
+    Ok(lm.best().map_or((start, f64::INFINITY), |(p, c)| (*p, c)))
 }
 
 /// Iterations of each leave-one-out fit.
@@ -56,7 +44,7 @@ pub(super) fn leave_one_out(
     objective: &mut Objective,
     mesh: &RenderMesh,
     track: &Track,
-    free: Free,
+    mode: ScaleMode,
     radius: f64,
 ) -> Result<Option<(usize, Pose)>> {
     let n = track.weights.len();
@@ -70,9 +58,7 @@ pub(super) fn leave_one_out(
         .iter()
         .map(|v| v.iou)
         .collect();
-    let mut sorted = losses.clone();
-    sorted.sort_by(f64::total_cmp);
-    let (median, worst) = (sorted[n / 2], sorted[n - 1]);
+    let (median, worst) = (median(&losses), losses.iter().fold(f64::NEG_INFINITY, |m, &l| m.max(l)));
     if worst <= 1.3 * median || worst < median + 0.05 {
         return Ok(None);
     }
@@ -84,7 +70,7 @@ pub(super) fn leave_one_out(
             continue;
         }
         objective.set_weights(&w)?;
-        let (pose, _) = polish(objective, mesh, track.pose, LOO_ITERATIONS, free, radius)?;
+        let (pose, _) = polish(objective, mesh, track.pose, LOO_ITERATIONS, mode, radius)?;
         let l: Vec<f64> = objective.value(mesh, &pose)?.views.iter().map(|v| v.iou).collect();
         let others = |x: &[f64]| {
             x.iter()
@@ -117,15 +103,7 @@ pub fn robust_weights(losses: &[f64]) -> Vec<f64> {
     if losses.len() < 3 || losses.iter().any(|r| !r.is_finite()) {
         return vec![1.0; losses.len()];
     }
-    let mut sorted = losses.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    let n = sorted.len();
-    let median = if n % 2 == 1 {
-        sorted[n / 2]
-    } else {
-        0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
-    };
-    let tau = (2.0 * median).max(0.05);
+    let tau = (2.0 * median(losses)).max(0.05);
     losses
         .iter()
         .map(|&r| if r <= tau { 1.0 } else { (tau / r).powi(2) })

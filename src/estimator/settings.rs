@@ -5,8 +5,8 @@
 use super::cameras::CameraPrior;
 use crate::error::{Error, Result};
 use crate::loss::objective::ObjectiveSettings;
-use crate::loss::target::WindowMode;
 use crate::optim::adam::AdamSettings;
+use crate::optim::params::ScaleMode;
 use crate::optim::schedule::{Optimiser, StageSettings};
 use crate::optim::search::SearchSettings;
 use crate::pose::Pose;
@@ -14,23 +14,11 @@ use crate::raster::lod::DEFAULT_DETAIL_PX;
 use crate::raster::silhouette::RasterKind;
 use crate::raster::soft::SoftSettings;
 use crate::verdict::{Verdict, VerdictThresholds};
+use crate::window::WindowMode;
 use serde::{Deserialize, Serialize};
 
 /// The default object window's margin on each side, as a fraction of the mask's box.
 pub const OBJECT_MARGIN: f64 = 0.3;
-
-/// How the scale is fitted.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ScaleMode {
-    /// Per-axis scale (9-DoF; the default).
-    Anisotropic,
-    /// One scale for all axes (7-DoF).
-    Isotropic,
-    /// The CAD model is to scale: the scale stays at the initial value (1 unless an
-    /// initial pose gives another), in the search and every stage.
-    Fixed,
-}
 
 /// Everything the fit can be told. [`FitSettings::default`] is the one default of
 /// the command line, the browser, the npm package and `bench`.
@@ -176,11 +164,24 @@ pub enum Phase {
 pub enum Termination {
     /// The loss stopped improving by more than the tolerance, at a pose the views accept.
     Converged,
-    /// The last stage ran all its iterations.
-    MaxIterations,
+    /// The schedule ran to its end: the last stage did all its iterations, the loss
+    /// still falling slowly (a finished fit; the verdict says whether it is good).
+    Completed,
     /// The loss stopped improving at a pose the views reject, or rose or stayed flat
     /// for long: the best pose so far was kept.
     Stalled,
+}
+
+impl Termination {
+    /// What a user is told: `"converged"`, `"schedule completed"` or `"stalled (best
+    /// pose kept)"` — a fit that ran its schedule to the end did not fail to converge.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Termination::Converged => "converged",
+            Termination::Completed => "schedule completed",
+            Termination::Stalled => "stalled (best pose kept)",
+        }
+    }
 }
 
 /// A snapshot after a step, for display.

@@ -1,64 +1,21 @@
-//! Work an estimator step needs, computed elsewhere: a [`Request`] names it (a search
-//! batch, or every view's part of a refinement iteration), a [`Shard`] — an estimator's
-//! mirror holding some of its views, in another thread or Web Worker — computes its
-//! share, and [`Estimator::respond`](super::Estimator::respond) takes the
-//! [`Response`]s back. The browser's pool of Workers renders the views of one
-//! iteration this way; a shard's results are the estimator's own, bit for bit.
+//! The one step path. Every step of a fit is a [`Request`] (a search batch, or every
+//! view's part of a refinement iteration) answered by [`Response`]s and completed by
+//! [`Estimator::respond`](super::Estimator::respond). [`Estimator::step`](super::Estimator::step)
+//! answers its own request with a [`Worker`] holding every view; a [`Shard`] — the same
+//! worker over some of the views, with its own [`FitSetup`], in another thread or Web
+//! Worker — answers a share of it. Both run [`Worker::work`], so a pool's fit is the
+//! single worker's, bit for bit, by construction.
 
-use super::settings::{FitSettings, ScaleMode};
+use super::setup::FitSetup;
 use crate::error::{Error, Result};
 use crate::loss::objective::{Objective, PartKind, ViewPart};
-use crate::loss::target::{ViewTarget, Window};
 use crate::mesh::Mesh;
 use crate::optim::search::{self, Candidate};
 use crate::pose::Pose;
 use crate::raster::hard::BitMask;
-use crate::raster::silhouette::RenderMesh;
 use crate::view::View;
-use glam::{DMat3, DVec3};
-
-/// Scores `rotations` (re-fitting translation and scale) from the start pose `start`:
-/// one search batch, the same wherever it is computed.
-pub(super) fn score_rotations(
-    search_mesh: &Mesh,
-    targets: &[crate::loss::target::ViewTarget],
-    rotations: &[DMat3],
-    start: &Pose,
-    centre: DVec3,
-    settings: &FitSettings,
-) -> Vec<Candidate> {
-    let refit_scale = refits_scale(settings);
-    let c = start.apply(centre);
-    let score = |r: &DMat3, bits: &mut BitMask| {
-        let pose = Pose {
-            rotation: *r,
-            translation: c - *r * (start.scale * centre),
-            scale: start.scale,
-        };
-        search::score_candidate(
-            search_mesh,
-            targets,
-            pose,
-            centre,
-            settings.search.refit_rounds,
-            refit_scale,
-            bits,
-        )
-    };
-    #[cfg(not(target_arch = "wasm32"))]
-    {
-        use rayon::prelude::*;
-        rotations
-            .par_iter()
-            .map_init(|| BitMask::empty(0, 0), |bits, r| score(r, bits))
-            .collect()
-    }
-    #[cfg(target_arch = "wasm32")]
-    {
-        let mut bits = BitMask::empty(0, 0);
-        rotations.iter().map(|r| score(r, &mut bits)).collect()
-    }
-}
+use crate::window::Window;
+use glam::DMat3;
 
 /// Work one estimator step needs (see the module doc).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -109,7 +66,7 @@ impl Request {
     }
 }
 
-/// A shard's answer to a [`Request`].
+/// A worker's answer to a [`Request`].
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum Response {
@@ -129,93 +86,92 @@ pub enum Response {
     },
 }
 
-/// An estimator's mirror holding some of its views (`mine`), built from the same mesh,
-/// views and settings, so that its objectives are the estimator's own.
-pub struct Shard {
-    model: RenderMesh,
-    search_model: RenderMesh,
-    views: Vec<View>,
-    windows: Vec<Window>,
+/// The objectives a worker keeps between requests: the search's (over every view: a
+/// candidate is scored over all of them) and the current stage's (over its views).
+pub(crate) struct Worker {
     mine: Vec<usize>,
-    settings: FitSettings,
-    centre: DVec3,
-    rotations: Vec<DMat3>,
-    /// The search's targets (all views: a candidate is scored over every view).
     search: Option<Objective>,
-    /// Stage objective over my views, and its stage.
     stage: Option<(usize, Objective)>,
 }
 
-impl Shard {
-    /// A shard of the estimator of `mesh`, `views` and `settings`, computing the parts of
-    /// views `mine` (and any search batch).
-    ///
-    /// Errors: invalid settings or mesh, or a view index beyond the views.
-    pub fn new(mesh: Mesh, views: Vec<View>, mine: Vec<usize>, settings: FitSettings) -> Result<Shard> {
-        settings.validate()?;
-        mesh.validate("mesh")?;
-        if let Some(&v) = mine.iter().find(|&&v| v >= views.len()) {
-            return Err(Error::Settings(format!("shard: no view {v} of {}", views.len())));
-        }
-        let b = mesh.bounds().ok_or_else(|| Error::Mesh {
-            file: "mesh".into(),
-            problem: "has no vertices".into(),
-        })?;
-        let windows = views.iter().map(|v| Window::for_view(v, settings.window)).collect();
-        Ok(Shard {
-            search_model: RenderMesh::exact(mesh.clustered(settings.search.resolution * 3 / 8)),
-            model: RenderMesh::with_detail(mesh, settings.detail_px),
-            rotations: settings.search.sampling.rotations(),
-            centre: b.centre(),
-            views,
-            windows,
+impl Worker {
+    /// A worker computing the parts of views `mine`.
+    pub(crate) fn new(mine: Vec<usize>) -> Worker {
+        Worker {
             mine,
-            settings,
             search: None,
             stage: None,
-        })
+        }
     }
 
-    /// The views this shard computes.
-    pub fn views(&self) -> &[usize] {
-        &self.mine
+    /// The search's objective: hard IoUs only (no contour fields).
+    pub(crate) fn search_objective(&mut self, setup: &FitSetup) -> Result<&mut Objective> {
+        if self.search.is_none() {
+            let mut s = setup.settings.clone();
+            s.lambda_contour = 0.0;
+            s.lambda_iou = 1.0;
+            let o = Objective::new(
+                &setup.views,
+                &setup.windows,
+                s.search.resolution,
+                s.objective(&s.stages[0]),
+            )?;
+            self.search = Some(o);
+        }
+        Ok(self.search.as_mut().expect("set above"))
     }
 
-    /// Computes its share of `request`.
+    /// Stage `stage`'s objective over this worker's views (the previous stage's is
+    /// dropped).
+    ///
+    /// Errors: no such stage.
+    pub(crate) fn stage_objective(&mut self, setup: &FitSetup, stage: usize) -> Result<&mut Objective> {
+        let s = setup
+            .settings
+            .stages
+            .get(stage)
+            .ok_or_else(|| Error::Settings(format!("no stage {stage}")))?;
+        if self.stage.as_ref().is_none_or(|(k, _)| *k != stage) {
+            self.stage = None;
+            let views: Vec<View> = self.mine.iter().map(|&v| setup.views[v].clone()).collect();
+            let windows: Vec<Window> = self.mine.iter().map(|&v| setup.windows[v]).collect();
+            let o = Objective::new(&views, &windows, s.resolution, setup.settings.objective(s))?;
+            self.stage = Some((stage, o));
+        }
+        Ok(&mut self.stage.as_mut().expect("set above").1)
+    }
+
+    /// Stage `stage`'s objective's unions for the Gauss–Newton model, if it is built.
+    pub(crate) fn stage_union(&self, stage: usize) -> Option<Vec<f64>> {
+        self.stage
+            .as_ref()
+            .filter(|(k, _)| *k == stage)
+            .map(|(_, o)| o.model_union().to_vec())
+    }
+
+    /// Computes this worker's share of `request` — the one function every step runs.
     ///
     /// Errors: a stage or rotation beyond the settings', a malformed request.
-    pub fn work(&mut self, request: &Request) -> Result<Response> {
+    pub(crate) fn work(&mut self, setup: &FitSetup, request: &Request) -> Result<Response> {
         match request {
             Request::Search { start, first, count } => {
                 start.validate()?;
                 let end = first
                     .checked_add(*count)
-                    .filter(|&e| e <= self.rotations.len())
+                    .filter(|&e| e <= setup.rotations.len())
                     .ok_or_else(|| {
                         Error::Settings(format!(
                             "search rotations {first}..+{count} of {}",
-                            self.rotations.len()
+                            setup.rotations.len()
                         ))
                     })?;
-                if self.search.is_none() {
-                    let mut s = self.settings.clone();
-                    s.lambda_contour = 0.0;
-                    s.lambda_iou = 1.0;
-                    self.search = Some(Objective::new(
-                        &self.views,
-                        &self.windows,
-                        s.search.resolution,
-                        s.objective(&s.stages[0]),
-                    )?);
-                }
-                let targets: &[ViewTarget] = self.search.as_ref().map(|o| o.targets()).unwrap_or_default();
+                let targets = self.search_objective(setup)?.targets();
                 let candidates = score_rotations(
-                    &self.search_model.mesh,
+                    &setup.search_model.mesh,
                     targets,
-                    &self.rotations[*first..end],
+                    &setup.rotations[*first..end],
                     start,
-                    self.centre,
-                    &self.settings,
+                    setup,
                 );
                 Ok(Response::Candidates {
                     first: *first,
@@ -228,32 +184,17 @@ impl Shard {
                 kind,
                 model_union,
             } => {
-                let s = self
-                    .settings
-                    .stages
-                    .get(*stage)
-                    .ok_or_else(|| Error::Settings(format!("no stage {stage}")))?;
                 pose.validate()?;
-                if model_union.len() != self.views.len() {
+                if model_union.len() != setup.views.len() {
                     return Err(Error::Settings(format!(
                         "{} unions for {} views",
                         model_union.len(),
-                        self.views.len()
+                        setup.views.len()
                     )));
                 }
-                if self.stage.as_ref().is_none_or(|(k, _)| k != stage) {
-                    let views: Vec<View> = self.mine.iter().map(|&v| self.views[v].clone()).collect();
-                    let windows: Vec<Window> = self.mine.iter().map(|&v| self.windows[v]).collect();
-                    let o = Objective::new(&views, &windows, s.resolution, self.settings.objective(s))?;
-                    self.stage = Some((*stage, o));
-                }
-                let model = if s.resolution <= self.settings.search.resolution {
-                    &self.search_model
-                } else {
-                    &self.model
-                };
                 let union: Vec<f64> = self.mine.iter().map(|&v| model_union[v]).collect();
-                let (_, objective) = self.stage.as_mut().expect("set above");
+                let objective = self.stage_objective(setup, *stage)?;
+                let model = setup.model_for(*stage);
                 let parts = objective.view_parts(model, pose, *kind, &union)?;
                 Ok(Response::Parts {
                     views: self.mine.clone(),
@@ -264,7 +205,78 @@ impl Shard {
     }
 }
 
-/// Whether the scale is re-fitted in the search.
-pub(super) fn refits_scale(settings: &FitSettings) -> bool {
-    settings.scale_mode != ScaleMode::Fixed
+/// Scores `rotations` (re-fitting translation and scale) from the start pose `start`.
+fn score_rotations(
+    search_mesh: &Mesh,
+    targets: &[crate::loss::target::ViewTarget],
+    rotations: &[DMat3],
+    start: &Pose,
+    setup: &FitSetup,
+) -> Vec<Candidate> {
+    let settings = &setup.settings;
+    let centre = setup.centre;
+    let c = start.apply(centre);
+    let score = |r: &DMat3, bits: &mut BitMask| {
+        let pose = Pose {
+            rotation: *r,
+            translation: c - *r * (start.scale * centre),
+            scale: start.scale,
+        };
+        search::score_candidate(
+            search_mesh,
+            targets,
+            pose,
+            centre,
+            settings.search.refit_rounds,
+            settings.scale_mode.fits_scale(),
+            bits,
+        )
+    };
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        use rayon::prelude::*;
+        rotations
+            .par_iter()
+            .map_init(|| BitMask::empty(0, 0), |bits, r| score(r, bits))
+            .collect()
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        let mut bits = BitMask::empty(0, 0);
+        rotations.iter().map(|r| score(r, &mut bits)).collect()
+    }
+}
+
+/// A worker over some of a fit's views with its own [`FitSetup`] (module doc).
+pub struct Shard {
+    setup: FitSetup,
+    worker: Worker,
+}
+
+impl Shard {
+    /// A shard of the fit of `mesh`, `views` and `settings`, computing the parts of views
+    /// `mine` (and any search batch).
+    ///
+    /// Errors: invalid settings or mesh, or a view index beyond the views.
+    pub fn new(mesh: Mesh, views: Vec<View>, mine: Vec<usize>, settings: crate::FitSettings) -> Result<Shard> {
+        if let Some(&v) = mine.iter().find(|&&v| v >= views.len()) {
+            return Err(Error::Settings(format!("shard: no view {v} of {}", views.len())));
+        }
+        Ok(Shard {
+            setup: FitSetup::new(mesh, views, settings)?,
+            worker: Worker::new(mine),
+        })
+    }
+
+    /// The views this shard computes.
+    pub fn views(&self) -> &[usize] {
+        &self.worker.mine
+    }
+
+    /// Computes its share of `request`.
+    ///
+    /// Errors: a stage or rotation beyond the settings', a malformed request.
+    pub fn work(&mut self, request: &Request) -> Result<Response> {
+        self.worker.work(&self.setup, request)
+    }
 }

@@ -25,14 +25,15 @@
 
 use crate::error::{Error, Result};
 use crate::loss::iou::UNION_EPS;
-use crate::loss::target::{ViewTarget, Window};
+use crate::loss::target::ViewTarget;
 use crate::mesh::Mesh;
-use crate::pose::Pose;
+use crate::pose::{Mat9, Pose, Vec9};
 use crate::raster::hard::{render_bits_into, BitMask};
 use crate::raster::project::{project_mesh, POSE_DIM};
 use crate::raster::silhouette::{RasterKind, RenderMesh, SilhouetteRenderer};
 use crate::raster::soft::SoftSettings;
 use crate::view::View;
+use crate::window::Window;
 #[cfg(not(target_arch = "wasm32"))]
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -71,10 +72,10 @@ impl ObjectiveSettings {
 /// Gauss–Newton normal equations of the objective at a pose (θ order `[ω, t, ls]`).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct NormalEquations {
-    /// The curvature model `Σ c_p·J_p J_pᵀ` (9×9, symmetric), `jtj[i][j]`.
-    pub jtj: [[f64; POSE_DIM]; POSE_DIM],
+    /// The curvature model `Σ c_p·J_p J_pᵀ` (9×9, symmetric).
+    pub jtj: Mat9,
     /// The exact gradient of the loss.
-    pub jtr: [f64; POSE_DIM],
+    pub jtr: Vec9,
     /// The loss.
     pub cost: f64,
 }
@@ -82,12 +83,8 @@ pub struct NormalEquations {
 impl NormalEquations {
     /// Adds `other` scaled by `weight`.
     pub fn add_scaled(&mut self, other: &NormalEquations, weight: f64) {
-        for i in 0..POSE_DIM {
-            for j in 0..POSE_DIM {
-                self.jtj[i][j] += weight * other.jtj[i][j];
-            }
-            self.jtr[i] += weight * other.jtr[i];
-        }
+        self.jtj += other.jtj * weight;
+        self.jtr += other.jtr * weight;
         self.cost += weight * other.cost;
     }
 }
@@ -289,15 +286,15 @@ impl Objective {
             for a in 0..POSE_DIM {
                 ne.jtr[a] += w * (c_mask * part.g[0][a] + c_back * part.g[1][a] + l2 * part.g[2][a]);
                 // Only the upper triangle was accumulated.
-                for (b, h) in ne.jtj[a].iter_mut().enumerate() {
-                    *h += w * if b >= a { part.h[a][b] } else { part.h[b][a] };
+                for b in 0..POSE_DIM {
+                    ne.jtj[(a, b)] += w * if b >= a { part.h[(a, b)] } else { part.h[(b, a)] };
                 }
             }
             ev.total += w * v.total;
             ev.views.push(v);
         }
         ne.cost = ev.total;
-        ev.gradient = ne.jtr;
+        ev.gradient = ne.jtr.into();
         (ev, ne)
     }
 
@@ -419,8 +416,8 @@ pub struct ViewPart {
     pub contour: f64,
     /// The three field gradients (mask, background, contour).
     pub g: [[f64; POSE_DIM]; 3],
-    /// The curvature, upper triangle (`h[a][b]`, b ≥ a).
-    pub h: [[f64; POSE_DIM]; POSE_DIM],
+    /// The curvature, upper triangle (`h[(a, b)]`, b ≥ a).
+    pub h: Mat9,
 }
 
 /// Evaluates one view; `iou_scale` is λ1/U of the view's previous evaluation (the
@@ -439,7 +436,7 @@ fn view_part(
         union: 0.0,
         contour: 0.0,
         g: [[0.0; POSE_DIM]; 3],
-        h: [[0.0; POSE_DIM]; POSE_DIM],
+        h: Mat9::zeros(),
     };
     let contour = t.contour.as_ref().filter(|_| s.lambda_contour > 0.0);
     let (mask, known) = (&t.mask, t.known.as_deref());
@@ -456,7 +453,8 @@ fn view_part(
             })?;
         }
         PartKind::GaussNewton => {
-            let (g, h) = (&mut part.g, &mut part.h);
+            let mut upper = [[0.0; POSE_DIM]; POSE_DIM];
+            let (g, h) = (&mut part.g, &mut upper);
             let l2 = s.lambda_contour;
             raster.render_with_jacobians(mesh, pose, &t.camera, &s.soft, |p, a, j| {
                 if !t.is_known(p) {
@@ -478,6 +476,7 @@ fn view_part(
                 }
                 accumulate(h, j, c);
             })?;
+            part.h = Mat9::from_fn(|a, b| upper[a][b]);
         }
     }
     let alpha = raster.alpha();

@@ -13,11 +13,9 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::pose::Pose;
+pub use crate::pose::POSE_DIM;
 use glam::{DMat3, DVec2, DVec3};
 use wide::f64x2;
-
-/// Number of pose parameters.
-pub const POSE_DIM: usize = 9;
 
 /// A mesh's vertices in one camera.
 #[derive(Debug, Clone, Default)]

@@ -5,18 +5,19 @@
 
 use super::{combine, sandwich, std_dev, view_information, NoiseModel, Uncertainty};
 use crate::error::Result;
-use crate::loss::target::{ViewTarget, Window};
-use crate::optim::lm::Free;
+use crate::loss::target::ViewTarget;
+use crate::optim::params::ScaleMode;
 use crate::pose::Pose;
 use crate::raster::silhouette::RenderMesh;
 use crate::view::View;
+use crate::window::Window;
 
 /// The long side of the canvas the information is measured on, at most.
 pub const RESOLUTION: u32 = 512;
 
 /// The uncertainty of `pose` fitted to `views` (seen through `windows`, with the
 /// fit's per-view `weights`; a view of weight 0 adds nothing), over the parameters
-/// `free`.
+/// `mode`.
 ///
 /// Errors: no view has an outline to measure (e.g. the object is outside every
 /// window), or the information is not finite.
@@ -26,7 +27,7 @@ pub fn fit_uncertainty(
     windows: &[Window],
     pose: &Pose,
     weights: &[f64],
-    free: Free,
+    mode: ScaleMode,
     noise: &NoiseModel,
 ) -> Result<Uncertainty> {
     let mut infos = Vec::with_capacity(views.len());
@@ -40,7 +41,7 @@ pub fn fit_uncertainty(
         used.push(w);
     }
     let (h, b, noise_power) = combine(&infos, &used, noise)?;
-    let cov = sandwich(&h, &b, free, noise)?;
+    let cov = sandwich(&h, &b, mode, noise)?;
     let (sq, len) = infos.iter().zip(&used).fold((0.0, 0.0), |(s, l), (i, &w)| {
         (s + w * i.residual_sq, l + w * i.outline_px)
     });
@@ -51,6 +52,6 @@ pub fn fit_uncertainty(
         information: h,
         noise: b,
         noise_power,
-        free,
+        mode,
     })
 }

@@ -49,25 +49,20 @@ pub mod outline;
 
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::optim::lm::Free;
+use crate::optim::params::ScaleMode;
 use crate::pose::Pose;
 use crate::so3;
 use glam::DVec3;
-use nalgebra::{DMatrix, SMatrix, SVector};
+use nalgebra::{DMatrix, SMatrix};
 use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 
 pub use fit::fit_uncertainty;
-pub use next_view::{candidate_viewpoints, rank_views, sphere_candidates, suggest_views, RankedView, Viewpoints};
+pub use next_view::{candidate_viewpoints, rank_views, RankedView, Viewpoints};
 pub use outline::{outline_information, view_information, ViewInformation};
 
-/// The pose dimension, `[ω, t, log s]`.
-pub const DIM: usize = 9;
-/// A 9×9 matrix in pose coordinates.
-pub type Mat9 = SMatrix<f64, DIM, DIM>;
-/// A 9-vector in pose coordinates.
-pub type Vec9 = SVector<f64, DIM>;
+pub use crate::pose::{Mat9, Vec9, POSE_DIM as DIM};
 
 /// The ridge of the inverse of H, relative to its mean eigenvalue.
 const RIDGE: f64 = 1e-9;
@@ -138,7 +133,7 @@ pub struct Uncertainty {
     /// further photograph of the same kind is expected to carry.
     pub noise_power: f64,
     /// The parameters the fit freed.
-    pub free: Free,
+    pub mode: ScaleMode,
 }
 
 impl Uncertainty {
@@ -146,25 +141,6 @@ impl Uncertainty {
     pub fn covariance_rows(&self) -> [[f64; DIM]; DIM] {
         std::array::from_fn(|i| std::array::from_fn(|j| self.covariance[(i, j)]))
     }
-}
-
-/// The free directions of θ for a scale mode, as a 9×k basis.
-pub fn free_basis(free: Free) -> DMatrix<f64> {
-    let k = match free {
-        Free::All => 9,
-        Free::IsotropicScale => 7,
-        Free::NoScale => 6,
-    };
-    let mut p = DMatrix::zeros(DIM, k);
-    for i in 0..6 {
-        p[(i, i)] = 1.0;
-    }
-    match free {
-        Free::All => (6..9).for_each(|i| p[(i, i)] = 1.0),
-        Free::IsotropicScale => (6..9).for_each(|i| p[(i, 6)] = 1.0),
-        Free::NoScale => {}
-    }
-    p
 }
 
 /// Inverts a symmetric positive semi-definite matrix with a ridge of 1e-9 of its mean
@@ -203,11 +179,11 @@ pub fn combine(infos: &[ViewInformation], weights: &[f64], noise: &NoiseModel) -
     Ok((h, b, power))
 }
 
-/// The sandwich `κ·H⁻¹BH⁻¹` over the directions `free` (module doc).
+/// The sandwich `κ·H⁻¹BH⁻¹` over the directions `mode` frees (module doc).
 ///
 /// Errors: H constrains nothing.
-pub fn sandwich(h: &Mat9, b: &Mat9, free: Free, noise: &NoiseModel) -> Result<Mat9> {
-    let p = free_basis(free);
+pub fn sandwich(h: &Mat9, b: &Mat9, mode: ScaleMode, noise: &NoiseModel) -> Result<Mat9> {
+    let p = mode.basis();
     let hp = p.transpose() * to_dyn(h) * &p;
     let k = hp.nrows();
     // The ridge is a weak observation of every direction, with the views' mean noise:
@@ -225,17 +201,8 @@ fn to_dyn(m: &Mat9) -> DMatrix<f64> {
     DMatrix::from_fn(DIM, DIM, |i, j| m[(i, j)])
 }
 
-/// The pose moved by `d` in `[ω, t, log s]`.
-pub fn perturb(pose: &Pose, d: &Vec9) -> Pose {
-    Pose {
-        rotation: so3::orthonormalize(pose.rotation * so3::exp(DVec3::new(d[0], d[1], d[2]))),
-        translation: pose.translation + DVec3::new(d[3], d[4], d[5]),
-        scale: pose.scale * DVec3::new(d[6], d[7], d[8]).exp(),
-    }
-}
-
 /// The error of `fitted` against `truth` in the covariance's coordinates:
-/// `[log(R̂ᵀR), t − t̂, log(s/ŝ)]`, so that `truth ≈ perturb(fitted, e)`.
+/// `[log(R̂ᵀR), t − t̂, log(s/ŝ)]`, so that `truth ≈ fitted.perturbed(e)`.
 pub fn pose_error(fitted: &Pose, truth: &Pose) -> Vec9 {
     let w = so3::log(fitted.rotation.transpose() * truth.rotation);
     let t = truth.translation - fitted.translation;
@@ -243,11 +210,11 @@ pub fn pose_error(fitted: &Pose, truth: &Pose) -> Vec9 {
     Vec9::from_column_slice(&[w.x, w.y, w.z, t.x, t.y, t.z, s[0], s[1], s[2]])
 }
 
-/// `eᵀΣ⁻¹e` over the directions `free` (the others' errors are not the fit's).
+/// `eᵀΣ⁻¹e` over the directions `mode` frees (the others' errors are not the fit's).
 ///
 /// Errors: a singular covariance.
-pub fn mahalanobis_sq(cov: &Mat9, e: &Vec9, free: Free) -> Result<f64> {
-    let p = free_basis(free);
+pub fn mahalanobis_sq(cov: &Mat9, e: &Vec9, mode: ScaleMode) -> Result<f64> {
+    let p = mode.basis();
     // Σ = P·Σ_free·Pᵀ, so Σ_free = P⁺ΣP⁺ᵀ and e's free coordinates are P⁺e.
     let pinv = (p.transpose() * &p)
         .try_inverse()
@@ -297,7 +264,7 @@ fn sampled_add(points: &[DVec3], pose: &Pose, cov: &Mat9, n: usize) -> (f64, f64
     let mut adds: Vec<f64> = (0..n)
         .map(|_| {
             let z = Vec9::from_fn(|_, _| normal(&mut rng));
-            let q = perturb(pose, &(l * z));
+            let q = pose.perturbed(&(l * z));
             points
                 .iter()
                 .zip(&base)
@@ -364,7 +331,7 @@ mod tests {
             scale: DVec3::new(1.2, 0.8, 1.0),
         };
         let d = Vec9::from_column_slice(&[0.01, -0.02, 0.005, 0.1, -0.05, 0.02, 0.01, -0.03, 0.02]);
-        let e = pose_error(&pose, &perturb(&pose, &d));
+        let e = pose_error(&pose, &pose.perturbed(&d));
         assert!((e - d).norm() < 1e-12, "{e} vs {d}");
     }
 
@@ -378,7 +345,7 @@ mod tests {
         };
         let w = add_metric(&mesh, &pose);
         let d = Vec9::from_column_slice(&[1e-4, -2e-4, 5e-5, 1e-4, -5e-5, 2e-5, 1e-4, -3e-4, 2e-4]);
-        let q = perturb(&pose, &d);
+        let q = pose.perturbed(&d);
         let pts = add_points(&mesh, 1000);
         let msd = pts
             .iter()
@@ -404,12 +371,12 @@ mod tests {
         assert!((small.scale_pct[2] - 1.0).abs() < 1e-9);
         // e = 2σ along one axis: d² = 4.
         let e = Vec9::from_column_slice(&[0.0, 0.02, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
-        let d2 = mahalanobis_sq(&cov, &e, Free::All).unwrap();
+        let d2 = mahalanobis_sq(&cov, &e, ScaleMode::Anisotropic).unwrap();
         assert!((d2 - 4.0).abs() < 1e-6, "{d2}");
         // With a uniform scale only the shared log-scale counts.
         let iso = covariance_of_iso();
         let e = Vec9::from_column_slice(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.01, 0.01, 0.01]);
-        let d2 = mahalanobis_sq(&iso, &e, Free::IsotropicScale).unwrap();
+        let d2 = mahalanobis_sq(&iso, &e, ScaleMode::Isotropic).unwrap();
         assert!((d2 - 1.0).abs() < 1e-6, "{d2}");
     }
 

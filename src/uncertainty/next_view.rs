@@ -12,11 +12,11 @@
 use super::{add_metric, outline_information, sandwich, Mat9, NoiseModel, Uncertainty};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::loss::target::Window;
 use crate::pose::Pose;
 use crate::raster::hard;
 use crate::raster::silhouette::RenderMesh;
 use crate::view::View;
+use crate::window::Window;
 use glam::DVec3;
 
 /// Margin of a candidate's object window, as a fraction of the silhouette's box.
@@ -49,15 +49,6 @@ pub enum Viewpoints {
     /// The half of the sphere above the object: on the side the views' mean image-up
     /// points to (a camera on an arm over a table cannot look from under it).
     Above,
-}
-
-/// `count` viewpoints evenly spread on the sphere (a Fibonacci lattice) around the
-/// object at `pose`, at the views' mean distance from it, looking at it, with the
-/// intrinsics of view 0 and image-up along view 0's.
-///
-/// Errors: no views.
-pub fn sphere_candidates(model: &RenderMesh, views: &[View], pose: &Pose, count: usize) -> Result<Vec<Camera>> {
-    candidate_viewpoints(model, views, pose, count, Viewpoints::Sphere)
 }
 
 /// `count` viewpoints evenly spread over `shell` (a Fibonacci lattice; see
@@ -144,7 +135,7 @@ pub fn rank_views(
         };
         if let Some(canvas) = object_canvas(model, pose, cam) {
             let (hc, length) = outline_information(model, pose, &canvas, noise)?;
-            let cov = sandwich(&(u.information + hc), &(u.noise + hc * u.noise_power), u.free, noise)?;
+            let cov = sandwich(&(u.information + hc), &(u.noise + hc * u.noise_power), u.mode, noise)?;
             out.predicted_add_rms = expected(&cov);
             out.outline_px = length;
         }
@@ -156,34 +147,6 @@ pub fn rank_views(
             .then(a.index.cmp(&b.index))
     });
     Ok(ranked)
-}
-
-/// The fit at `pose` to `views` (seen through `windows`, weighted by `weights`, over
-/// `free`): its uncertainty, then `candidates` ranked (default: 64 sphere viewpoints,
-/// [`sphere_candidates`]), best first.
-///
-/// Errors: as [`fit_uncertainty`] and [`rank_views`].
-#[allow(clippy::too_many_arguments)]
-pub fn suggest_views(
-    model: &RenderMesh,
-    views: &[View],
-    windows: &[Window],
-    pose: &Pose,
-    weights: &[f64],
-    free: crate::optim::lm::Free,
-    candidates: Option<&[Camera]>,
-    noise: &NoiseModel,
-) -> Result<Vec<RankedView>> {
-    let u = super::fit_uncertainty(model, views, windows, pose, weights, free, noise)?;
-    let sphere;
-    let candidates = match candidates {
-        Some(c) => c,
-        None => {
-            sphere = sphere_candidates(model, views, pose, SPHERE)?;
-            &sphere
-        }
-    };
-    rank_views(model, pose, &u, candidates, noise)
 }
 
 /// The default number of sphere candidates.
@@ -213,7 +176,7 @@ fn object_canvas(model: &RenderMesh, pose: &Pose, cam: &Camera) -> Option<Camera
 mod tests {
     use super::*;
     use crate::app::synth::{synthesize, SynthSettings};
-    use crate::optim::lm::Free;
+    use crate::optim::params::ScaleMode;
     use crate::uncertainty::fit_uncertainty;
 
     /// A blob seen by `views` synthetic cameras: its render mesh, views and true pose.
@@ -228,9 +191,9 @@ mod tests {
     }
 
     #[test]
-    fn sphere_candidates_look_at_the_object_from_the_views_distance() {
+    fn sphere_viewpoints_look_at_the_object_from_the_views_distance() {
         let (model, views, pose) = blob_scene(2);
-        let cams = sphere_candidates(&model, &views, &pose, 32).unwrap();
+        let cams = candidate_viewpoints(&model, &views, &pose, 32, Viewpoints::Sphere).unwrap();
         assert_eq!(cams.len(), 32);
         let c = pose.apply(model.mesh.bounds().unwrap().centre());
         let d0 = views.iter().map(|v| v.camera().centre().distance(c)).sum::<f64>() / 2.0;
@@ -282,9 +245,8 @@ mod tests {
                 assert!(da.angle_between(db) > spacing / 3.0);
             }
         }
-        // The sphere is the old lattice, both halves.
+        // The sphere: both halves, about view 0's up.
         let sphere = candidate_viewpoints(&model, &views, &pose, n, Viewpoints::Sphere).unwrap();
-        assert_eq!(sphere, sphere_candidates(&model, &views, &pose, n).unwrap());
         let up0 = -(views[0].camera().rotation.transpose() * DVec3::Y);
         let below = sphere.iter().filter(|k| (k.centre() - c).dot(up0) < 0.0).count();
         assert_eq!(below, n / 2);
@@ -310,10 +272,10 @@ mod tests {
         let (model, views, pose) = blob_scene(1);
         let windows = [Window::for_view(
             &views[0],
-            crate::loss::target::WindowMode::Object { margin: 0.3 },
+            crate::window::WindowMode::Object { margin: 0.3 },
         )];
         let noise = NoiseModel::default();
-        let u = fit_uncertainty(&model, &views, &windows, &pose, &[1.0], Free::All, &noise).unwrap();
+        let u = fit_uncertainty(&model, &views, &windows, &pose, &[1.0], ScaleMode::Anisotropic, &noise).unwrap();
         let c = pose.apply(model.mesh.bounds().unwrap().centre());
         let cam0 = views[0].camera();
         let eye0 = cam0.centre() - c;

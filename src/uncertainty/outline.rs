@@ -226,9 +226,9 @@ pub fn outline_information(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::loss::target::Window;
     use crate::so3;
     use crate::view::View;
+    use crate::window::Window;
     use glam::DVec3;
 
     fn scene() -> (RenderMesh, Pose, Camera) {
@@ -265,7 +265,7 @@ mod tests {
             let h = 0.03;
             let mut d = Vec9::zeros();
             d[k] = h;
-            let fd = (area(&super::super::perturb(&pose, &d)) - area(&super::super::perturb(&pose, &(-d)))) / (2.0 * h);
+            let fd = (area(&pose.perturbed(&d)) - area(&pose.perturbed(&(-d)))) / (2.0 * h);
             assert!(
                 (fd - darea[k]).abs() < 0.04 * scale,
                 "θ{k}: outline {} vs hard differences {fd}",
@@ -302,7 +302,7 @@ mod tests {
         let hi = (off.h + Mat9::identity() * (1e-9 * off.h.trace()))
             .try_inverse()
             .unwrap();
-        let stepped = super::super::perturb(&pose, &(hi * off.score));
+        let stepped = pose.perturbed(&(hi * off.score));
         let mask = crate::raster::hard::render(&model.mesh, &moved, &cam);
         let view = View::new("v", cam, mask, None, None, &Default::default()).unwrap();
         let target = ViewTarget::new(&view, Window::full(&cam), 96, true).unwrap();

@@ -8,7 +8,7 @@
 use super::session::Session;
 use super::to_js;
 use crate::camera::CameraJson;
-use crate::uncertainty::{next_view::SPHERE, Viewpoints};
+use crate::uncertainty::Viewpoints;
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
@@ -57,8 +57,7 @@ impl Session {
                 )))
             }
         };
-        let cams = self.estimator().viewpoints(SPHERE, shell)?;
-        let ranked = self.estimator().suggest_views(Some(&cams))?;
+        let ranked = self.estimator().suggest_views(None, shell)?;
         let out: Vec<Suggestion> = ranked
             .iter()
             .filter(|r| r.predicted_add_rms.is_finite())

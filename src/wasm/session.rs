@@ -6,20 +6,17 @@ use super::shard::{parse_request, MAX_SHARDS};
 use super::{to_js, FileSet};
 use crate::app::overlay;
 use crate::error::Result;
-use crate::estimator::{Estimator, FitSettings, Progress, Response};
-use crate::mask::Mask;
+use crate::estimator::{Estimator, FitSettings, PoseOut, Progress, Response, ViewFigures};
 use crate::mesh::Mesh;
 use crate::pose::Pose;
-use crate::result::PoseOut;
 use crate::view::View;
-use crate::{metrics, raster};
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::Clamped;
 
 /// A fit in progress: the estimator, the time spent stepping it, the loss of every
-/// refinement iteration, and the silhouettes rendered at the current pose (cached
-/// until the next step).
+/// refinement iteration, and the views' figures at the current pose (cached until the
+/// next step).
 #[wasm_bindgen]
 pub struct Session {
     est: Estimator,
@@ -28,7 +25,7 @@ pub struct Session {
     seconds: f64,
     losses: Vec<f64>,
     iteration: usize,
-    rendered: Option<Vec<Mask>>,
+    figures: Option<Vec<ViewFigures>>,
     /// When the pending [`Session::request`] was made (`Date.now()`, ms), for the time
     /// a pool's step takes.
     requested_at: Option<f64>,
@@ -74,7 +71,7 @@ impl Session {
             seconds: 0.0,
             losses: Vec::new(),
             iteration: 0,
-            rendered: None,
+            figures: None,
             requested_at: None,
             warnings: Vec::new(),
             grasps: Vec::new(),
@@ -107,36 +104,25 @@ impl Session {
     }
 
     /// The bookkeeping after a step, done here or by a pool of shards: the loss of an
-    /// optimiser iteration recorded, the rendered silhouettes invalidated.
+    /// optimiser iteration recorded, the views' figures invalidated.
     fn stepped(&mut self, p: &Progress) {
         if p.iteration > self.iteration {
             self.iteration = p.iteration;
             self.losses.push(p.loss);
         }
-        self.rendered = None;
+        self.figures = None;
     }
 
-    /// The full-resolution silhouettes at the current pose (rendered once per step).
-    fn rendered(&mut self) -> &[Mask] {
+    /// The views' full-resolution figures at the current pose
+    /// ([`Estimator::view_figures`], computed once per step).
+    fn figures(&mut self) -> &[ViewFigures] {
         let est = &self.est;
-        self.rendered.get_or_insert_with(|| {
-            let pose = est.pose();
-            est.views()
-                .iter()
-                .map(|v| raster::hard::render(est.mesh(), &pose, v.camera()))
-                .collect()
-        })
+        self.figures.get_or_insert_with(|| est.view_figures(&est.pose()))
     }
 
     /// Full-resolution hard IoU per view at the current pose.
     pub fn full_ious(&mut self) -> Vec<f64> {
-        let rendered = self.rendered().to_vec();
-        self.est
-            .views()
-            .iter()
-            .zip(&rendered)
-            .map(|(v, m)| metrics::hard_iou_known(m, v.mask(), v.ignore()))
-            .collect()
+        self.figures().iter().map(|f| f.iou).collect()
     }
 
     fn progress_out(&mut self, p: &Progress) -> Result<JsValue, JsError> {
@@ -332,7 +318,7 @@ impl Session {
         if view >= n {
             return Err(JsError::new(&format!("no view {view}: the session has {n} views")));
         }
-        let rendered = self.rendered()[view].clone();
+        let rendered = self.figures()[view].rendered.clone();
         let v = &self.est.views()[view];
         let mut img = overlay::overlay(v, Some(&rendered));
         // The scene's grasps, carried by the current pose into this view.
@@ -388,7 +374,7 @@ impl Session {
         self.seconds = 0.0;
         self.losses.clear();
         self.iteration = 0;
-        self.rendered = None;
+        self.figures = None;
         self.requested_at = None;
         Ok(())
     }

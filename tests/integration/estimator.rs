@@ -177,9 +177,9 @@ fn bad_settings_are_refused() {
 #[test]
 fn the_search_ranks_the_true_orientation_first_and_refits_translation_and_scale() {
     use localisebot::loss::objective::{Objective, ObjectiveSettings};
-    use localisebot::loss::target::{Window, WindowMode};
     use localisebot::optim::search::score_candidate;
     use localisebot::raster::hard::BitMask;
+    use localisebot::{Window, WindowMode};
     let m = mesh("gltf/Duck/glTF-Binary/Duck.glb");
     let s = synthesize(
         &m,

@@ -5,8 +5,9 @@
 //! against the symmetric equivalent of the truth closest to the estimate, so that
 //! the command line, the page and `eval` report the same figures.
 
-use crate::estimator::{CameraCorrection, CameraTest, Estimator, Termination};
+use super::{CameraCorrection, CameraTest, Estimator, Termination};
 use crate::metrics::{pose_errors, PoseErrors};
+use crate::optim::params::ScaleMode;
 use crate::pose::{mat3_to_rows, mat4_to_rows, Pose};
 use crate::so3;
 use crate::symmetry;
@@ -52,6 +53,14 @@ pub struct ViewResult {
     pub iou: f64,
     /// Hausdorff distance between the rendered and the mask's contours, pixels.
     pub hausdorff_px: f64,
+    /// The view's weight in the final fit: 1, lower for a view the robust weighting
+    /// doubts, 0 for one set aside (once done; `suggest-view` plans with it).
+    #[serde(default = "one")]
+    pub weight: f64,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// The result file.
@@ -71,6 +80,9 @@ pub struct FitResult {
     pub iterations: usize,
     /// Why the fit stopped.
     pub termination: Option<Termination>,
+    /// Which scale parameters were fitted (`suggest-view` plans for the same).
+    #[serde(default = "anisotropic")]
+    pub scale_mode: ScaleMode,
     /// `ok`, `poor` or `failed` (see [`crate::Verdict`]); absent before the fit ends.
     #[serde(default)]
     pub verdict: Option<Verdict>,
@@ -112,24 +124,31 @@ pub struct FitResult {
     pub symmetric: Option<bool>,
 }
 
+fn anisotropic() -> ScaleMode {
+    ScaleMode::Anisotropic
+}
+
 impl Estimator {
     /// The result at the current (best) pose. `seconds` is the caller's measurement;
     /// `ground_truth` adds the error figures (allowing for the object's symmetries).
     pub fn result(&self, seconds: f64, ground_truth: Option<&Pose>) -> FitResult {
         let pose = self.pose();
         let figs = self.view_figures(&pose);
+        let weights = self.view_weights();
         let views: Vec<ViewResult> = self
             .views()
             .iter()
             .zip(&figs)
-            .map(|(v, f)| ViewResult {
+            .enumerate()
+            .map(|(i, (v, f))| ViewResult {
                 name: v.name().to_string(),
                 iou: f.iou,
                 hausdorff_px: f.hausdorff_px,
+                weight: weights.map_or(1.0, |w| w[i]),
             })
             .collect();
         let mean_iou = views.iter().map(|v| v.iou).sum::<f64>() / views.len().max(1) as f64;
-        let progress = self.progress();
+        let progress = self.snapshot(Vec::new());
         let judgement = self.judgement();
         let (errors, symmetric) = match ground_truth {
             None => (None, None),
@@ -164,6 +183,7 @@ impl Estimator {
             loss_history: self.loss_history(),
             iterations: progress.iteration,
             termination: progress.termination,
+            scale_mode: self.settings().scale_mode,
             verdict: judgement.map(|j| j.verdict),
             verdict_reasons: judgement.map(|j| j.reasons.clone()).unwrap_or_default(),
             doubted_views: judgement.map(|j| j.doubted_views.clone()).unwrap_or_default(),

@@ -1,0 +1,224 @@
+//! The end of a fit, computed once: the camera corrections when asked for, every
+//! view's figures at full resolution, the verdict, the uncertainty and the
+//! termination; and what is asked of a finished fit (the next best view).
+
+use super::cameras;
+use super::refine::{Track, PATIENCE};
+use super::{Estimator, State, Termination};
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::mask::Mask;
+use crate::mesh::Mesh;
+use crate::metrics;
+use crate::pose::Pose;
+use crate::raster::hard;
+use crate::uncertainty::{fit_uncertainty, std_dev, NoiseModel, RankedView, Uncertainty, Viewpoints};
+use crate::verdict::{self, Judgement, Verdict};
+use crate::view::View;
+
+/// A view's figures at full resolution.
+#[derive(Debug, Clone)]
+pub struct ViewFigures {
+    /// Hard IoU over the known pixels.
+    pub iou: f64,
+    /// Hausdorff distance between the rendered and the mask's contours, pixels.
+    pub hausdorff_px: f64,
+    /// The rendered silhouette.
+    pub rendered: Mask,
+}
+
+/// A view's figures at full resolution (IoU over the known pixels): the one function
+/// behind the progress's IoUs, the result, the overlays and the page's views.
+pub fn view_figures(mesh: &Mesh, pose: &Pose, view: &View) -> ViewFigures {
+    let rendered = hard::render(mesh, pose, view.camera());
+    ViewFigures {
+        iou: metrics::hard_iou_known(&rendered, view.mask(), view.ignore()),
+        hausdorff_px: metrics::hausdorff_px(&rendered, view.mask()),
+        rendered,
+    }
+}
+
+/// What a finished fit holds.
+pub(super) struct Final {
+    pub pose: Pose,
+    /// The winning candidate (its loss history and view weights).
+    pub track: Track,
+    pub views: Vec<ViewFigures>,
+    pub judgement: Judgement,
+    pub termination: Termination,
+    /// The pose's uncertainty, or why it could not be measured.
+    pub uncertainty: std::result::Result<Uncertainty, String>,
+    /// The camera corrections when asked for, or why they could not be estimated.
+    pub corrections: Option<std::result::Result<Vec<cameras::CameraCorrection>, String>>,
+    /// Whether they were applied.
+    pub camera_test: Option<cameras::CameraTest>,
+}
+
+impl Estimator {
+    /// Ends the fit with `track`, the winner (module doc). The uncertainty is measured
+    /// once, at the object-only optimum; applied camera corrections add the covariance
+    /// their freedom costs (`cameras` module doc).
+    pub(super) fn finish(&mut self, track: Track) -> Final {
+        let settings = &self.setup.settings;
+        let noise = NoiseModel::default();
+        let mut pose = track.best_pose;
+        let mut uncertainty = fit_uncertainty(
+            &self.setup.model,
+            &self.setup.views,
+            &self.setup.windows,
+            &pose,
+            &track.weights,
+            settings.scale_mode,
+            &noise,
+        )
+        .map_err(|e| e.to_string());
+        let (mut corrections, mut camera_test) = (None, None);
+        if let Some(prior) = settings.refine_cameras {
+            let last = settings.stages.last().expect("validated: at least one stage");
+            let refined = uncertainty.as_ref().map_err(|e| e.clone()).and_then(|u| {
+                cameras::refine(
+                    &self.setup.model,
+                    &self.setup.views,
+                    &self.setup.windows,
+                    &track.weights,
+                    pose,
+                    settings.scale_mode,
+                    last.resolution,
+                    settings.objective(last),
+                    &prior,
+                    &u.covariance,
+                )
+                .map_err(|e| e.to_string())
+            });
+            match refined {
+                Ok(r) => {
+                    if r.test.applied {
+                        pose = r.pose;
+                        self.input_views = Some(std::mem::replace(&mut self.setup.views, r.views));
+                        if let Ok(u) = &mut uncertainty {
+                            u.covariance += r.extra_covariance;
+                            u.std_dev = std_dev(self.setup.mesh(), &pose, &u.covariance, u.std_dev.boundary_rms_px);
+                        }
+                    }
+                    corrections = Some(Ok(r.corrections));
+                    camera_test = Some(r.test);
+                }
+                Err(e) => corrections = Some(Err(e)),
+            }
+        }
+        let settings = &self.setup.settings;
+        let views: Vec<ViewFigures> = self
+            .setup
+            .views
+            .iter()
+            .map(|v| view_figures(self.setup.mesh(), &pose, v))
+            .collect();
+        let names: Vec<&str> = self.setup.views.iter().map(|v| v.name()).collect();
+        let ious: Vec<f64> = views.iter().map(|f| f.iou).collect();
+        let inconsistent: Vec<String> = self
+            .setup
+            .views
+            .iter()
+            .zip(&track.weights)
+            .filter(|(_, &w)| w < 0.5)
+            .map(|(v, _)| v.name().to_string())
+            .collect();
+        let judgement = verdict::judge(&names, &ious, &inconsistent, &settings.verdict);
+        let termination = if track.converged && judgement.verdict != Verdict::Failed {
+            Termination::Converged
+        } else if track.converged || track.since_best >= PATIENCE {
+            Termination::Stalled
+        } else {
+            Termination::Completed
+        };
+        Final {
+            pose,
+            track,
+            views,
+            judgement,
+            termination,
+            uncertainty,
+            corrections,
+            camera_test,
+        }
+    }
+
+    fn done(&self) -> Option<&Final> {
+        match &self.state {
+            State::Done(f) => Some(f),
+            _ => None,
+        }
+    }
+
+    /// Per-view figures at full resolution for a pose (kept for the final pose).
+    pub fn view_figures(&self, pose: &Pose) -> Vec<ViewFigures> {
+        match self.done() {
+            Some(f) if f.pose == *pose => f.views.clone(),
+            _ => self
+                .setup
+                .views
+                .iter()
+                .map(|v| view_figures(self.setup.mesh(), pose, v))
+                .collect(),
+        }
+    }
+
+    /// The verdict and the views it doubts, once done.
+    pub fn judgement(&self) -> Option<&Judgement> {
+        self.done().map(|f| &f.judgement)
+    }
+
+    /// The views' weights in the final fit (robust re-weighting; 0 for a view set
+    /// aside), once done.
+    pub fn view_weights(&self) -> Option<&[f64]> {
+        self.done().map(|f| f.track.weights.as_slice())
+    }
+
+    /// The final pose's uncertainty once done (`Err` says why it could not be
+    /// measured); `None` before.
+    pub fn uncertainty(&self) -> Option<std::result::Result<&Uncertainty, &str>> {
+        self.done().map(|f| f.uncertainty.as_ref().map_err(|e| e.as_str()))
+    }
+
+    /// The views' camera corrections once done with `refine_cameras` (`Err` says why
+    /// they could not be estimated); `None` otherwise.
+    pub fn camera_corrections(&self) -> Option<std::result::Result<&[cameras::CameraCorrection], &str>> {
+        self.done()
+            .and_then(|f| f.corrections.as_ref())
+            .map(|c| c.as_ref().map(|v| v.as_slice()).map_err(|e| e.as_str()))
+    }
+
+    /// Once done with `refine_cameras`: how much of the loss the corrections removed
+    /// and whether they were applied (`cameras` module doc "When to apply").
+    pub fn camera_test(&self) -> Option<cameras::CameraTest> {
+        self.done().and_then(|f| f.camera_test)
+    }
+
+    /// Asks for (or stops asking for) the camera correction, with its prior, before the
+    /// fit ends (`FitSettings::refine_cameras`).
+    ///
+    /// Errors: the fit is already done, or the prior is out of range.
+    pub fn set_refine_cameras(&mut self, prior: Option<cameras::CameraPrior>) -> Result<()> {
+        if self.is_done() {
+            return Err(Error::Settings("camera correction: the fit is already done".into()));
+        }
+        if let Some(p) = &prior {
+            p.validate()?;
+        }
+        self.setup.settings.refine_cameras = prior;
+        Ok(())
+    }
+
+    /// Candidate cameras ranked by how much a photograph from there is predicted to
+    /// shrink the final pose's uncertainty, best first: `candidates`, or 64 viewpoints
+    /// over `shell` around the object — [`FitSetup::suggest_views`](super::FitSetup::suggest_views)
+    /// with the fit's pose and view weights (as `suggest-view` and the page).
+    ///
+    /// Errors: the fit is not done, or its uncertainty could not be measured.
+    pub fn suggest_views(&self, candidates: Option<&[Camera]>, shell: Viewpoints) -> Result<Vec<RankedView>> {
+        let Some(f) = self.done() else {
+            return Err(Error::Settings("next view: the fit is not done".into()));
+        };
+        self.setup.suggest_views(&f.pose, &f.track.weights, candidates, shell)
+    }
+}
