@@ -3,7 +3,7 @@
 # command line, and www/examples/index.json listing them ({"examples": [{id, title,
 # path}]}, path relative to index.json), which "Load example" offers:
 #
-#   toy   the project's procedural toy aeroplane (src/shapes.rs), 4 views: always;
+#   toy   the project's procedural toy aeroplane (src/app/shapes.rs), 4 views: always;
 #   duck  the Khronos Duck, read where it is in ../shared/data (the shared third-party
 #         data beside the repository), 4 views: when ../shared is there;
 #   lmo-duck  real photographs: three Linemod-Occluded views of the duck (Kinect,

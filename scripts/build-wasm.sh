@@ -22,7 +22,8 @@ if [ "${WASM_OPT_SKIP:-}" != 1 ] && ! "$WASM_OPT_BIN" --version 2>/dev/null | gr
     "(or: npm ci --prefix tools)" >&2
   exit 1
 fi
-cargo build --locked --release --lib --target wasm32-unknown-unknown
+# Without the cargo feature `softras` (the reference renderer stays native).
+cargo build --locked --release --lib --no-default-features --target wasm32-unknown-unknown
 rm -rf "$OUT"
 wasm-bindgen --target web --out-dir "$OUT" "${CARGO_TARGET_DIR:-target}/wasm32-unknown-unknown/release/localisebot.wasm"
 WASM="$OUT/localisebot_bg.wasm"

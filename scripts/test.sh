@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The whole test suite: formatting, clippy, native tests, the wasm32 build, the wasm
+# The whole test suite: formatting, clippy, native tests (the fast tier, then the
+# second: statistical and real-photograph checks), the wasm32 build, the wasm
 # tests in headless Chromium and Node, the web page end to end (after building the
 # wasm package and the page's examples), the npm package.
 #
@@ -28,7 +29,7 @@ step() { # step NAME COMMAND...
   fi
 }
 
-wasm_tests() { # wasm_tests (browser|node) TEST_TARGET...
+wasm_tests() { # wasm_tests (browser|node) TEST_TARGET... — built as the shipped wasm is (no `softras`)
   local where=$1
   shift
   local tests=()
@@ -36,21 +37,25 @@ wasm_tests() { # wasm_tests (browser|node) TEST_TARGET...
   if command -v wasm-pack >/dev/null; then
     # wasm-pack uses the wasm-bindgen-test-runner on PATH when its version matches Cargo.lock.
     if [ "$where" = browser ]; then
-      wasm-pack test --headless --chrome --chromedriver "$(command -v chromedriver)" -- --locked "${tests[@]}"
+      wasm-pack test --headless --chrome --chromedriver "$(command -v chromedriver)" -- --locked --no-default-features "${tests[@]}"
     else
-      wasm-pack test --node -- --locked "${tests[@]}"
+      wasm-pack test --node -- --locked --no-default-features "${tests[@]}"
     fi
   else
     echo "(wasm-pack not installed: running wasm-bindgen-test-runner directly)"
     CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner \
-      cargo test --locked --target wasm32-unknown-unknown "${tests[@]}"
+      cargo test --locked --no-default-features --target wasm32-unknown-unknown "${tests[@]}"
   fi
 }
 
 step "cargo fmt --check" cargo fmt --all -- --check
 step "cargo clippy" cargo clippy --all-targets --locked -- -D warnings
-step "native tests" cargo test --locked --no-fail-fast
-step "wasm32 build of the library" cargo build --locked --lib --release --target wasm32-unknown-unknown
+step "cargo doc (the crate's manual: no broken links, every public item documented)" \
+  env RUSTDOCFLAGS="-D warnings" cargo doc --locked --no-deps
+step "cargo clippy (the second tier of tests)" cargo clippy --test tier2 --locked -- -D warnings
+step "native tests (fast tier: cargo test)" cargo test --locked --no-fail-fast
+step "native tests, second tier (statistical checks, real photographs)" cargo test --locked --no-fail-fast --test tier2
+step "wasm32 build of the library" cargo build --locked --lib --release --no-default-features --target wasm32-unknown-unknown
 step "wasm tests in headless Chromium" wasm_tests browser wasm
 step "wasm tests in Node" wasm_tests node wasm_node
 # Real glTF files of ../shared compiled in with include_bytes!: without ../shared this
@@ -59,6 +64,8 @@ step "wasm tests in Node on the shared glTF files" wasm_tests node wasm_shared
 step "the wasm package (www/pkg)" bash scripts/build-wasm.sh
 step "the page's examples (www/examples)" bash scripts/build-examples.sh
 step "the page's browser libraries (www/vendor: three.js)" bash scripts/build-vendor.sh
+step "the examples a user learns from (examples/: a scene built in code, a scene file fitted)" \
+  bash -c 'cargo run --locked --release --example build_scene && for s in www/examples/*/scene.json; do cargo run --locked --release --example fit_scene -- "$s" || exit 1; done'
 step "the web page, end to end (Playwright + Chromium)" node tests/e2e/page.test.mjs
 step "the page's 3D view, end to end (Playwright + Chromium, WebGL on SwiftShader)" node tests/e2e/view3d.test.mjs
 step "the npm package (pkg-config/): build, npm pack, load in Node" \

@@ -13,6 +13,7 @@
 //! recall = TP / ground-truth objects, F1 = 2PR / (P + R).
 
 use crate::estimator::FitResult;
+use crate::metrics::median;
 use serde::{Deserialize, Serialize};
 
 /// One scene's outcome.
@@ -94,10 +95,6 @@ pub fn accuracy_measure(o: &SceneOutcome) -> f64 {
         .map_or(f64::INFINITY, |e| if o.symmetric { e.add_s_rel } else { e.add_rel })
 }
 
-fn median(v: Vec<f64>) -> f64 {
-    crate::metrics::median(&v)
-}
-
 /// P/R/F1 at `threshold` over all views of all scenes.
 pub fn prf(outcomes: &[SceneOutcome], threshold: f64) -> PrfRow {
     let (mut tp, mut pred, mut gt) = (0, 0, 0);
@@ -165,10 +162,10 @@ pub fn summarise(outcomes: &[SceneOutcome]) -> Summary {
         scenes: n,
         prf: [0.25, 0.5, 0.75].iter().map(|&t| prf(outcomes, t)).collect(),
         add_accuracy: if n == 0 { 0.0 } else { accurate as f64 / n as f64 },
-        median_rotation_deg: median(errs.iter().map(|e| e.rotation_deg).collect()),
-        median_translation: median(errs.iter().map(|e| e.translation).collect()),
-        median_scale_error: median(errs.iter().map(|e| e.scale).collect()),
-        median_add_rel: median(outcomes.iter().map(accuracy_measure).collect()),
+        median_rotation_deg: median(&errs.iter().map(|e| e.rotation_deg).collect::<Vec<_>>()),
+        median_translation: median(&errs.iter().map(|e| e.translation).collect::<Vec<_>>()),
+        median_scale_error: median(&errs.iter().map(|e| e.scale).collect::<Vec<_>>()),
+        median_add_rel: median(&outcomes.iter().map(accuracy_measure).collect::<Vec<_>>()),
         mean_iou: if ious.is_empty() {
             0.0
         } else {
@@ -177,7 +174,7 @@ pub fn summarise(outcomes: &[SceneOutcome]) -> Summary {
         grasp_accuracy: (grasps_total > 0).then(|| grasps_correct as f64 / grasps_total as f64),
         loss_by_views: by_views(outcomes, |o| &o.loss_by_views),
         add_rel_by_views: by_views(outcomes, |o| &o.add_rel_by_views),
-        median_seconds: median(outcomes.iter().map(|o| o.result.seconds).collect()),
+        median_seconds: median(&outcomes.iter().map(|o| o.result.seconds).collect::<Vec<_>>()),
     }
 }
 

@@ -2,7 +2,6 @@
 //! procedural shapes (tests, benchmarks, examples), overlays for display, parallel-jaw
 //! grasps and the paper's evaluation. The pipeline modules never depend on these.
 
-pub mod coverage;
 pub mod eval;
 pub mod grasp;
 pub mod overlay;

@@ -77,6 +77,12 @@ impl SynthScene {
     }
 }
 
+/// The hard silhouette of `mesh` at `pose` in `camera`: the mask a perfect segmenter
+/// would give (what [`synthesize`] draws; pixel centres inside the projected mesh).
+pub fn render_mask(mesh: &Mesh, pose: &Pose, camera: &Camera) -> Mask {
+    hard::render(mesh, pose, camera)
+}
+
 /// A rotation drawn uniformly from SO(3).
 pub fn random_rotation(rng: &mut SmallRng) -> DMat3 {
     // Shoemake's method.
@@ -168,7 +174,7 @@ pub fn synthesize(mesh: &Mesh, settings: &SynthSettings, pose: Option<Pose>) -> 
         let mut tries = 0;
         loop {
             let cam = Camera::look_at(centre + dir * dist, centre, up, w, h, f);
-            let mask = hard::render(mesh, &pose, &cam);
+            let mask = render_mask(mesh, &pose, &cam);
             if mask.area() > 0 && !mask.touches_border() {
                 cameras.push(cam);
                 masks.push(mask);

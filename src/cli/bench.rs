@@ -14,8 +14,8 @@ use localisebot::app::shapes;
 use localisebot::app::synth::{blob_mesh, synthesize, SynthSettings};
 use localisebot::io::bop::{self, BopOptions, MaskKind};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
+use localisebot::raster::silhouette::SoftSettings;
 use localisebot::raster::silhouette::{RasterKind, RenderMesh};
-use localisebot::raster::soft::SoftSettings;
 use localisebot::Window;
 use localisebot::{load_scene, Estimator, FitSettings, Mesh, Pose, Scene, View};
 use std::path::{Path, PathBuf};
@@ -322,8 +322,7 @@ fn time_objective(
             f().map_err(|e| e.to_string())?;
             times.push(t.elapsed().as_secs_f64() * 1e3);
         }
-        times.sort_by(f64::total_cmp);
-        Ok(times[times.len() / 2])
+        Ok(localisebot::metrics::median(&times))
     };
     let fwd_bwd = median(&mut || {
         objective

@@ -6,7 +6,7 @@
 use super::files::{load_pose, load_scene_file, to_json, CliResult};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::raster::silhouette::RenderMesh;
-use localisebot::raster::soft::SoftSettings;
+use localisebot::raster::silhouette::SoftSettings;
 use localisebot::FitSettings;
 use localisebot::Window;
 use std::path::PathBuf;

@@ -244,7 +244,7 @@ pub(super) fn refine(
 ) -> Result<Refined> {
     prior.validate()?;
     let settings = ObjectiveSettings {
-        soft: crate::raster::soft::SoftSettings {
+        soft: crate::raster::silhouette::SoftSettings {
             sigma: settings.soft.sigma.max(JOINT_SIGMA),
             ..settings.soft
         },

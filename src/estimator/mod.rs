@@ -36,7 +36,6 @@ mod shard;
 pub use cameras::{CameraCorrection, CameraPrior, CameraTest};
 pub use finish::ViewFigures;
 pub use result::{FitResult, PoseOut, ViewResult};
-pub use robust::robust_weights;
 pub use settings::{FitSettings, Phase, Progress, Termination, OBJECT_MARGIN};
 pub use setup::FitSetup;
 pub use shard::{Request, Response, Shard};

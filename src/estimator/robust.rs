@@ -99,7 +99,7 @@ pub(super) fn leave_one_out(
 /// With the robust scale `τ = max(2·median(r), 0.05)`, `w_v = 1` for `r_v ≤ τ` and
 /// `(τ/r_v)²` above (a Cauchy-like tail); with fewer than 3 views there is no majority
 /// to trust and every weight is 1.
-pub fn robust_weights(losses: &[f64]) -> Vec<f64> {
+pub(super) fn robust_weights(losses: &[f64]) -> Vec<f64> {
     if losses.len() < 3 || losses.iter().any(|r| !r.is_finite()) {
         return vec![1.0; losses.len()];
     }

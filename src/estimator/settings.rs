@@ -12,7 +12,7 @@ use crate::optim::search::SearchSettings;
 use crate::pose::Pose;
 use crate::raster::lod::DEFAULT_DETAIL_PX;
 use crate::raster::silhouette::RasterKind;
-use crate::raster::soft::SoftSettings;
+use crate::raster::silhouette::SoftSettings;
 use crate::verdict::{Verdict, VerdictThresholds};
 use crate::window::WindowMode;
 use serde::{Deserialize, Serialize};
@@ -48,7 +48,7 @@ pub struct FitSettings {
     /// The soft rasteriser of every stage (default: the silhouette-edge one).
     pub raster: RasterKind,
     /// Down-weight, from the second stage on, a view whose loss contradicts the
-    /// others' ([`robust_weights`]; default on).
+    /// others' (robust weights; default on).
     pub robust: bool,
     /// Estimate a correction of every view's camera jointly with the pose, under this
     /// prior, after the stages (`fit --refine-cameras`; default off).
@@ -99,9 +99,10 @@ impl FitSettings {
         WindowMode::Object { margin: OBJECT_MARGIN }
     }
 
-    /// Checks ranges.
+    /// Checks ranges, and that the rasteriser is in this build.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::Settings(m));
+        self.raster.check_available()?;
         if self.stages.is_empty() {
             return bad("at least one refinement stage is needed".into());
         }
@@ -202,7 +203,8 @@ pub struct Progress {
     /// The loss at the current pose (NaN during the search).
     pub loss: f64,
     /// Hard IoU per view at the current pose, at the current stage's resolution
-    /// (filled by [`Estimator::progress`], empty after [`Estimator::step`]).
+    /// (filled by [`Estimator::progress`](crate::Estimator::progress), empty after
+    /// [`Estimator::step`](crate::Estimator::step)).
     pub view_iou: Vec<f64>,
     /// The current pose.
     #[serde(skip)]

@@ -1,5 +1,5 @@
 //! Bytes in, core types out (and back): meshes (glTF, OBJ, PLY; glTF and PLY written), masks and images (PNG),
-//! scene files (SPEC §3). Nothing here touches the file system: files the data
+//! scene files (SPEC §3) and the grasps they list. Nothing here touches the file system: files the data
 //! refers to are asked for through a resolver closure, `&dyn Fn(&str) -> Option<Vec<u8>>`,
 //! given the path as written relative to the scene (or mesh) file.
 
@@ -7,6 +7,7 @@ pub mod bop;
 pub mod fileset;
 pub mod gltf;
 pub mod gltf_write;
+pub mod grasp;
 pub mod mask;
 pub mod nerf;
 pub mod obj;

@@ -66,7 +66,7 @@ pub struct Scene {
     /// A given true pose.
     pub ground_truth_pose: Option<Pose>,
     /// Grasps in the object frame, validated.
-    pub grasps: Vec<crate::app::grasp::Grasp>,
+    pub grasps: Vec<crate::io::grasp::Grasp>,
     /// The file as read.
     pub json: SceneJson,
     /// What was accepted with a reservation (e.g. a camera rotation projected onto
@@ -175,7 +175,7 @@ pub fn scene_from_parts(
         warnings,
         initial_pose,
         ground_truth_pose,
-        grasps: crate::app::grasp::grasps_from_json(&json.grasps, scene_file)?,
+        grasps: crate::io::grasp::grasps_from_json(&json.grasps, scene_file)?,
         mesh,
         views,
         json,

@@ -30,8 +30,8 @@ use crate::mesh::Mesh;
 use crate::pose::{Mat9, Pose, Vec9};
 use crate::raster::hard::{render_bits_into, BitMask};
 use crate::raster::project::{project_mesh, POSE_DIM};
+use crate::raster::silhouette::SoftSettings;
 use crate::raster::silhouette::{RasterKind, RenderMesh, SilhouetteRenderer};
-use crate::raster::soft::SoftSettings;
 use crate::view::View;
 use crate::window::Window;
 #[cfg(not(target_arch = "wasm32"))]

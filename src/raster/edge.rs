@@ -68,7 +68,7 @@ use crate::camera::{Camera, MAX_SIDE};
 use crate::error::{Error, Result};
 use crate::mask::Mask;
 use crate::raster::project::Projected;
-use crate::raster::soft::SoftSettings;
+use crate::raster::silhouette::SoftSettings;
 use candidates::EdgeSetup;
 use glam::DVec2;
 use pass::Best;

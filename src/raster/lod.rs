@@ -317,8 +317,8 @@ mod tests {
     use crate::app::shapes::blob_mesh;
     use crate::mask::Mask;
     use crate::raster::hard;
+    use crate::raster::silhouette::SoftSettings;
     use crate::raster::silhouette::{RasterKind, RenderMesh, SilhouetteRenderer};
-    use crate::raster::soft::SoftSettings;
 
     /// A camera on the +z side looking at the origin from `distance`.
     fn camera(distance: f64, side: u32) -> Camera {

@@ -1,7 +1,7 @@
 //! Rasterisation: the projection of the posed mesh (`project`), hard (binary)
 //! silhouettes (`hard`), and soft silhouettes with their analytic backward passes —
-//! the silhouette-edge rasteriser (`edge`, the default) and SoftRas (`tiles`, `soft`,
-//! `soft_backward`) — behind one interface (`silhouette`), which renders the
+//! the silhouette-edge rasteriser (`edge`, the default) and SoftRas (`softras`, the
+//! cargo feature `softras`) — behind one interface (`silhouette`), which renders the
 //! coarsest level of detail within a pixel tolerance (`lod`); `shade` renders
 //! synthetic photographs.
 
@@ -11,6 +11,5 @@ pub mod lod;
 pub mod project;
 pub mod shade;
 pub mod silhouette;
-pub mod soft;
-pub mod soft_backward;
-mod tiles;
+#[cfg(feature = "softras")]
+pub mod softras;

@@ -1,8 +1,8 @@
 //! The soft silhouette a loss sees, from either rasteriser behind one interface:
 //! [`RasterKind::Edge`] (the default: the hard coverage inside, softness and gradient
 //! from the outline edges only, `raster::edge`) or [`RasterKind::SoftRas`] (the
-//! paper's renderer, every triangle's σ-band, `raster::soft`; the one PyTorch3D
-//! checks). A [`RenderMesh`] is a mesh with the edge topology it needs, built once.
+//! paper's renderer, every triangle's σ-band, `raster::softras`, the cargo feature
+//! `softras`; the one PyTorch3D checks). A [`RenderMesh`] is a mesh with the edge topology it needs, built once.
 //!
 //! Three entry points, as the objective needs them: the silhouette alone; the
 //! silhouette and, in the same sweep, the 9-gradients of `Σ_p W_f(p)·A_p` for K
@@ -11,16 +11,69 @@
 //! `raster::project`).
 
 use crate::camera::Camera;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::pose::Pose;
 use crate::raster::edge::{EdgeSilhouette, EdgeTopology};
 use crate::raster::lod::{DetailLevels, DEFAULT_DETAIL_PX};
 use crate::raster::project::{PoseProjection, POSE_DIM};
-use crate::raster::soft::{SoftRasterizer, SoftSettings};
+#[cfg(feature = "softras")]
+use crate::raster::softras::SoftRasterizer;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 use wide::f64x2;
+
+/// Softness of the soft silhouette (both rasterisers).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SoftSettings {
+    /// σ in pixel² (default 1.0): the width of the sigmoid edge. PyTorch3D's σ in NDC²
+    /// is `σ_px = σ_ndc·(min(width, height)/2)²` (see [`SoftSettings::from_ndc`]).
+    pub sigma: f64,
+    /// ε (default 1e-4): outside pairs with `D_j < ε`, i.e. `d² ≥ σ·ln(1/ε − 1)`, are
+    /// skipped. PyTorch3D's `blur_radius = ln(1/ε − 1)·σ` with the same ε.
+    pub eps: f64,
+}
+
+impl Default for SoftSettings {
+    fn default() -> Self {
+        SoftSettings { sigma: 1.0, eps: 1e-4 }
+    }
+}
+
+impl SoftSettings {
+    /// Settings equivalent to PyTorch3D's `sigma` given in NDC² for an image of this
+    /// size (NDC spans 2 units over the shorter side), with ε = 1e-4.
+    pub fn from_ndc(sigma_ndc: f64, width: u32, height: u32) -> SoftSettings {
+        let half = width.min(height) as f64 * 0.5;
+        SoftSettings {
+            sigma: sigma_ndc * half * half,
+            eps: 1e-4,
+        }
+    }
+
+    /// The squared cut-off distance `σ·ln(1/ε − 1)` (px²) beyond which an outside
+    /// triangle contributes less than ε and is skipped.
+    pub fn cutoff_sq(&self) -> f64 {
+        self.sigma * (1.0 / self.eps - 1.0).ln()
+    }
+
+    /// Checks `σ > 0` (finite) and `0 < ε < 0.5`.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.sigma.is_finite() && self.sigma > 0.0) {
+            return Err(Error::Settings(format!(
+                "soft silhouette sigma must be a positive number of pixel², got {}",
+                self.sigma
+            )));
+        }
+        if !(self.eps > 0.0 && self.eps < 0.5) {
+            return Err(Error::Settings(format!(
+                "soft silhouette eps must be in (0, 0.5), got {}",
+                self.eps
+            )));
+        }
+        Ok(())
+    }
+}
 
 /// Which soft rasteriser renders the silhouettes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -30,8 +83,24 @@ pub enum RasterKind {
     /// from the outline edges (cost follows the outline, not the triangle count).
     #[default]
     Edge,
-    /// SoftRas (Liu et al. 2019; the paper's renderer): every triangle's σ-band.
+    /// SoftRas (Liu et al. 2019; the paper's renderer): every triangle's σ-band. Needs
+    /// the cargo feature `softras` (on by default natively, off in the shipped wasm).
     SoftRas,
+}
+
+impl RasterKind {
+    /// An error when this build cannot render with it (SoftRas without the cargo
+    /// feature `softras`).
+    pub fn check_available(self) -> Result<()> {
+        if self == RasterKind::SoftRas && !cfg!(feature = "softras") {
+            return Err(Error::Settings(
+                "SoftRas is not in this build (it is the cargo feature `softras`, off in the wasm package); \
+                 use the default rasteriser, edge"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// A mesh with the edge topology the silhouette-edge rasteriser needs (welded
@@ -88,6 +157,7 @@ impl RenderMesh {
 #[derive(Debug, Clone)]
 pub struct SilhouetteRenderer {
     kind: RasterKind,
+    #[cfg(feature = "softras")]
     soft: SoftRasterizer,
     edge: EdgeSilhouette,
     /// The edge path's projection (SoftRas keeps its own).
@@ -107,6 +177,7 @@ impl SilhouetteRenderer {
     pub fn new(kind: RasterKind) -> SilhouetteRenderer {
         SilhouetteRenderer {
             kind,
+            #[cfg(feature = "softras")]
             soft: SoftRasterizer::new(),
             edge: EdgeSilhouette::new(),
             projection: PoseProjection::default(),
@@ -125,7 +196,10 @@ impl SilhouetteRenderer {
     /// The last render's silhouette A (row-major, the camera's width × height).
     pub fn alpha(&self) -> &[f64] {
         match self.kind {
+            #[cfg(feature = "softras")]
             RasterKind::SoftRas => &self.soft.silhouette().alpha,
+            #[cfg(not(feature = "softras"))]
+            RasterKind::SoftRas => &[],
             RasterKind::Edge => self.edge.alpha(),
         }
     }
@@ -141,10 +215,14 @@ impl SilhouetteRenderer {
 
     /// Renders the silhouette of `m` at `pose` in `camera`.
     pub fn render(&mut self, m: &RenderMesh, pose: &Pose, camera: &Camera, s: &SoftSettings) -> Result<&[f64]> {
+        self.kind.check_available()?;
         match self.kind {
+            #[cfg(feature = "softras")]
             RasterKind::SoftRas => {
                 self.soft.render(&m.mesh, pose, camera, s)?;
             }
+            #[cfg(not(feature = "softras"))]
+            RasterKind::SoftRas => {}
             RasterKind::Edge => {
                 self.render_edge(m, pose, camera, s)?;
             }
@@ -162,6 +240,8 @@ impl SilhouetteRenderer {
         s: &SoftSettings,
         field: impl Fn(usize) -> [f64; K],
     ) -> Result<[[f64; POSE_DIM]; K]> {
+        self.kind.check_available()?;
+        #[cfg(feature = "softras")]
         if self.kind == RasterKind::SoftRas {
             return self.soft.render_with_gradients(&m.mesh, pose, camera, s, field);
         }
@@ -226,6 +306,8 @@ impl SilhouetteRenderer {
         s: &SoftSettings,
         mut visit: impl FnMut(usize, f64, &[f64; POSE_DIM]),
     ) -> Result<()> {
+        self.kind.check_available()?;
+        #[cfg(feature = "softras")]
         if self.kind == RasterKind::SoftRas {
             self.soft.render_with_jacobians(&m.mesh, pose, camera, s, visit)?;
             return Ok(());

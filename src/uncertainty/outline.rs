@@ -15,7 +15,7 @@ use crate::pose::Pose;
 use crate::raster::edge::{EdgeSilhouette, OutlineSample};
 use crate::raster::project::PoseProjection;
 use crate::raster::silhouette::RenderMesh;
-use crate::raster::soft::SoftSettings;
+use crate::raster::silhouette::SoftSettings;
 use glam::DVec2;
 
 /// What one view tells about the pose.

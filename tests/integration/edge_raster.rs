@@ -14,7 +14,7 @@ use localisebot::app::synth::blob_mesh;
 use localisebot::raster::edge::{EdgeSilhouette, EdgeTopology};
 use localisebot::raster::hard;
 use localisebot::raster::project::{project_mesh, Projected};
-use localisebot::raster::soft::SoftSettings;
+use localisebot::raster::silhouette::SoftSettings;
 use localisebot::{so3, Camera, Mask, Mesh, Pose};
 use oracle::*;
 

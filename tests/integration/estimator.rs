@@ -45,14 +45,16 @@ fn duck_is_found_from_no_initial_pose() {
         100.0 * e.add_rel,
         100.0 * e.scale
     );
-    assert!(e.rotation_deg < 3.0, "{e:?}");
-    assert!(e.add_rel < 0.02, "{e:?}");
-    assert!(e.scale < 0.03, "{e:?}");
+    // Measured: rotation 0.06°, ADD 0.06 %, scale 0.11 %; the bounds are a few times that.
+    assert!(e.rotation_deg < 0.3, "{e:?}");
+    assert!(e.add_rel < 0.003, "{e:?}");
+    assert!(e.scale < 0.005, "{e:?}");
     let r = est.result(1.5, Some(&s.pose));
     assert_eq!((r.verdict, r.doubted_views.len()), (Some(Verdict::Ok), 0));
     assert_eq!(r.symmetric, Some(false));
     assert_eq!(r.views.len(), 4);
-    assert!(r.views.iter().all(|v| v.iou > 0.95), "{:?}", r.views);
+    // Measured: IoUs 0.996–0.999.
+    assert!(r.views.iter().all(|v| v.iou > 0.99), "{:?}", r.views);
     assert!(!r.loss_history.is_empty());
     assert_eq!(r.seconds, 1.5);
     // The result file's matrix is the pose's object-to-world matrix.
@@ -90,10 +92,14 @@ fn a_given_initial_pose_skips_the_search_and_is_refined() {
     est.run(100_000).unwrap();
     let after = pose_errors(&scene.mesh, &est.pose(), &gt);
     println!(
-        "reference case: rotation {:.2}° -> {:.2}°, ADD {:.3} -> {:.3}",
-        before.rotation_deg, after.rotation_deg, before.add_rel, after.add_rel
+        "reference case: rotation {:.2}° -> {:.3}°, ADD {:.2} % -> {:.4} % of the diameter",
+        before.rotation_deg,
+        after.rotation_deg,
+        100.0 * before.add_rel,
+        100.0 * after.add_rel
     );
-    assert!(after.rotation_deg < 2.0 && after.add_rel < 0.01, "{after:?}");
+    // Measured: 22° -> 0.04°, ADD 13.6 % -> 0.02 %.
+    assert!(after.rotation_deg < 0.2 && after.add_rel < 0.001, "{after:?}");
     assert!(after.rotation_deg < before.rotation_deg / 5.0);
 }
 
@@ -255,7 +261,13 @@ fn the_papers_euler_grid_search_also_finds_the_object() {
     assert_eq!(p.search_total, 512);
     est.run(100_000).unwrap();
     let e = pose_errors(&m, &est.pose(), &s.pose);
-    assert!(e.add_rel < 0.05, "{e:?}");
+    println!(
+        "euler grid: rotation {:.3}°, ADD {:.3} % of diameter",
+        e.rotation_deg,
+        100.0 * e.add_rel
+    );
+    // Measured: rotation 0.15°, ADD 0.09 %.
+    assert!(e.add_rel < 0.004 && e.rotation_deg < 0.6, "{e:?}");
 }
 
 fn blob_scene(views: usize, seed: u64) -> (Mesh, localisebot::app::synth::SynthScene) {
@@ -351,7 +363,10 @@ fn the_contour_weight_changes_what_the_default_optimiser_minimises() {
     // The loss the fit reports includes the contour term: larger with λ2 = 1.
     assert!(h1[0] > h0[0], "{} vs {}", h1[0], h0[0]);
     for p in [p0, p1] {
-        assert!(pose_errors(&m, &p, &s.pose).add_rel < 0.02);
+        let e = pose_errors(&m, &p, &s.pose);
+        println!("contour weight: ADD {:.4} % of diameter", 100.0 * e.add_rel);
+        // Measured: 0.32 % (a coarse 96² blob, started 9° off).
+        assert!(e.add_rel < 0.01, "{e:?}");
     }
 }
 

@@ -9,8 +9,8 @@ use crate::{data, reference};
 use glam::DVec3;
 use localisebot::app::synth::{blob_mesh, synthesize, SynthSettings};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
+use localisebot::raster::silhouette::SoftSettings;
 use localisebot::raster::silhouette::{RasterKind, RenderMesh};
-use localisebot::raster::soft::SoftSettings;
 use localisebot::{so3, Mask, Pose, Scene, View};
 use localisebot::{Window, WindowMode};
 

@@ -5,7 +5,8 @@
 use glam::{DVec2, DVec3};
 use localisebot::loss::contour::ContourTarget;
 use localisebot::loss::iou::{soft_iou_loss, soft_iou_loss_grad};
-use localisebot::raster::soft::{render, SoftRasterizer, SoftSettings, SoftSilhouette, DEGENERATE_DOUBLE_AREA};
+use localisebot::raster::silhouette::SoftSettings;
+use localisebot::raster::softras::{render, SoftRasterizer, SoftSilhouette, DEGENERATE_DOUBLE_AREA};
 use localisebot::{so3, Camera, Mask, Mesh, Pose, Scene};
 
 // ---------------------------------------------------------------- helpers

@@ -10,7 +10,7 @@ use glam::{DVec2, DVec3};
 use localisebot::raster::edge::{EdgeRecord, EdgeSilhouette, EdgeTopology, WELD_TOLERANCE};
 use localisebot::raster::hard;
 use localisebot::raster::project::Projected;
-use localisebot::raster::soft::SoftSettings;
+use localisebot::raster::silhouette::SoftSettings;
 use localisebot::{so3, Camera, Mask, Mesh, Pose};
 use std::collections::HashMap;
 

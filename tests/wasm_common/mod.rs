@@ -583,3 +583,19 @@ fn shards_give_the_session_s_own_fit_bit_for_bit() {
     fresh.step(1).unwrap();
     assert_eq!(js_get(&fresh.progress().unwrap(), "searched").as_f64().unwrap(), 32.0);
 }
+
+#[wasm_bindgen_test]
+fn softras_is_in_the_build_only_with_its_feature() {
+    // The wasm package is built without the cargo feature `softras` (scripts/build-wasm.sh,
+    // and these suites in scripts/test.sh): asking for SoftRas is then a clear error.
+    let kind = localisebot::raster::silhouette::RasterKind::SoftRas;
+    match kind.check_available() {
+        Ok(()) => assert!(cfg!(feature = "softras")),
+        Err(e) => {
+            assert!(!cfg!(feature = "softras"));
+            assert!(e.to_string().contains("feature `softras`"), "{e}");
+        }
+    }
+    let settings = localisebot::FitSettings::for_raster(kind);
+    assert_eq!(settings.validate().is_ok(), cfg!(feature = "softras"));
+}

@@ -128,7 +128,7 @@ mod tests {
     use super::super::tests::{camera, flat};
     use super::*;
     use crate::raster::hard;
-    use crate::raster::soft::SoftSettings;
+    use crate::raster::silhouette::SoftSettings;
     use glam::{DVec2, DVec3};
 
     /// The edge render's coverage against the hard raster of all triangles.

@@ -179,7 +179,7 @@ mod tests {
     use crate::camera::Camera;
     use crate::raster::edge::EdgeTopology;
     use crate::raster::project::Projected;
-    use crate::raster::soft::SoftSettings;
+    use crate::raster::silhouette::SoftSettings;
     use glam::DVec3;
 
     #[test]

@@ -4,14 +4,10 @@
 //! on exact cameras the corrections explain too little of the loss to be applied, so
 //! the result is no worse.
 
+use crate::coverage::{camera_case, CameraCase, CoverageScenes};
 use crate::data;
-use localisebot::app::coverage::{camera_case, CameraCase, CoverageScenes};
 use localisebot::io;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
+use localisebot::metrics::median;
 
 #[test]
 fn refining_the_cameras_recovers_rotation_and_scale_from_miscalibrated_cameras() {
@@ -30,9 +26,9 @@ fn refining_the_cameras_recovers_rotation_and_scale_from_miscalibrated_cameras()
             .collect();
         assert!(cases.len() >= 9, "{} fits did not fail", cases.len());
         let m = (
-            median(cases.iter().map(|c| c.rotation_deg).collect()),
-            100.0 * median(cases.iter().map(|c| c.scale).collect()),
-            100.0 * median(cases.iter().map(|c| c.add_rel).collect()),
+            median(&cases.iter().map(|c| c.rotation_deg).collect::<Vec<_>>()),
+            100.0 * median(&cases.iter().map(|c| c.scale).collect::<Vec<_>>()),
+            100.0 * median(&cases.iter().map(|c| c.add_rel).collect::<Vec<_>>()),
             cases.iter().filter(|c| c.applied == Some(true)).count(),
         );
         assert_eq!(cases.iter().all(|c| c.applied.is_some()), refine);

@@ -74,10 +74,6 @@ fn fit(mesh: &Mesh, views: Vec<View>, truth: &Pose) -> (f64, f64, FitResult) {
     (e.rotation_deg, e.scale, est.result(0.0, Some(truth)))
 }
 
-fn median(v: Vec<f64>) -> f64 {
-    localisebot::metrics::median(&v)
-}
-
 #[test]
 fn with_its_ignore_mask_an_occluded_view_costs_no_accuracy() {
     let (mut clean, mut ignored) = (vec![], vec![]);
@@ -97,7 +93,9 @@ fn with_its_ignore_mask_an_occluded_view_costs_no_accuracy() {
         clean.push(c);
         ignored.push(i);
     }
-    let m = |v: &[(f64, f64, FitResult)], k: usize| median(v.iter().map(|r| if k == 0 { r.0 } else { r.1 }).collect());
+    let m = |v: &[(f64, f64, FitResult)], k: usize| {
+        localisebot::metrics::median(&v.iter().map(|r| if k == 0 { r.0 } else { r.1 }).collect::<Vec<_>>())
+    };
     println!(
         "median: unoccluded {:.2}° {:.2} %, with the ignore mask {:.2}° {:.2} %",
         m(&clean, 0),
@@ -105,8 +103,9 @@ fn with_its_ignore_mask_an_occluded_view_costs_no_accuracy() {
         m(&ignored, 0),
         100.0 * m(&ignored, 1)
     );
-    assert!(m(&ignored, 0) < 2.0 && m(&ignored, 1) < 0.03);
-    assert!(m(&ignored, 0) <= m(&clean, 0) + 0.5 && m(&ignored, 1) <= m(&clean, 1) + 0.01);
+    // Measured: median rotation 0.03°, scale 0.03 %.
+    assert!(m(&ignored, 0) < 0.2 && m(&ignored, 1) < 0.002);
+    assert!(m(&ignored, 0) <= m(&clean, 0) + 0.1 && m(&ignored, 1) <= m(&clean, 1) + 0.002);
 }
 
 #[test]
@@ -130,7 +129,9 @@ fn without_an_ignore_mask_the_occluded_view_is_named_and_costs_no_more_than_leav
         alone.push(a);
         dropped.push(d);
     }
-    let m = |v: &[(f64, f64, FitResult)], k: usize| median(v.iter().map(|r| if k == 0 { r.0 } else { r.1 }).collect());
+    let m = |v: &[(f64, f64, FitResult)], k: usize| {
+        localisebot::metrics::median(&v.iter().map(|r| if k == 0 { r.0 } else { r.1 }).collect::<Vec<_>>())
+    };
     println!(
         "median: no ignore mask {:.2}° {:.2} %, the view left out {:.2}° {:.2} %; named in {named}/{}",
         m(&alone, 0),

@@ -3,8 +3,8 @@
 //! `examples/uncertainty_coverage.rs`), the true error lies inside the reported 95 %
 //! ellipsoid in 85–99 % of the fits, clean and noisy masks together.
 
+use crate::coverage::{coverage, coverage_case, next_view_case, CoverageCase, CoverageScenes};
 use crate::data;
-use localisebot::app::coverage::{coverage, coverage_case, next_view_case, CoverageCase, CoverageScenes};
 use localisebot::io;
 use localisebot::metrics::median;
 use localisebot::uncertainty::Viewpoints;

@@ -1,17 +1,15 @@
 //! Is the reported uncertainty calibrated? Fits synthetic scenes with known truth
 //! (2–4 views, clean or roughened masks) from no initial pose and measures, for each,
 //! the squared Mahalanobis distance of the true error under the reported covariance
-//! and the true ADD against the reported 95 % ADD bound. Used by the coverage test,
-//! `bench` and the calibration of κ (`crate::uncertainty::NoiseModel::inflation`).
+//! and the true ADD against the reported 95 % ADD bound; and the next-best-view and
+//! camera-correction checks' scenes. Used by the second tier's statistical tests
+//! (`tests/tier2`), the calibration of κ (`localisebot::uncertainty::NoiseModel::inflation`).
 
-use crate::app::synth::{roughen, synthesize, SynthSettings};
-use crate::error::{Error, Result};
-use crate::estimator::{Estimator, FitSettings};
-use crate::mesh::Mesh;
-use crate::metrics;
-use crate::uncertainty::{mahalanobis_sq, pose_error, Mat9, Viewpoints, CHI2_9_95};
-use crate::verdict::Verdict;
-use crate::view::View;
+use localisebot::app::synth::{roughen, synthesize, SynthSettings};
+use localisebot::metrics;
+use localisebot::uncertainty::{mahalanobis_sq, pose_error, Viewpoints, CHI2_9_95};
+use localisebot::{Error, Result};
+use localisebot::{Estimator, FitSettings, Mat9, Mesh, Verdict, View};
 
 /// How the scenes are made.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -213,12 +211,12 @@ pub struct NextViewSetup {
     mesh: Mesh,
     seed: u64,
     scenes: CoverageScenes,
-    truth: crate::pose::Pose,
+    truth: localisebot::Pose,
     views: Vec<View>,
     /// The 2-view fit's pose.
-    pub fitted: crate::pose::Pose,
+    pub fitted: localisebot::Pose,
     /// The candidate cameras, in the sphere's order.
-    pub cameras: Vec<crate::camera::Camera>,
+    pub cameras: Vec<localisebot::Camera>,
     /// The indices of the candidates that see the object whole, best first.
     pub ranked: Vec<usize>,
 }
@@ -236,7 +234,7 @@ impl NextViewSetup {
         shell: Viewpoints,
         spread_deg: Option<f64>,
     ) -> Result<Option<NextViewSetup>> {
-        use crate::uncertainty::candidate_viewpoints;
+        use localisebot::uncertainty::candidate_viewpoints;
         let settings = SynthSettings {
             views: 2,
             width: scenes.width,
@@ -254,7 +252,7 @@ impl NextViewSetup {
                 .map_or(scene.pose.translation, |b| scene.pose.apply(b.centre()));
             let up = -(c0.rotation.transpose() * glam::DVec3::Y);
             let eye = centre + glam::DQuat::from_axis_angle(up, spread.to_radians()) * (c0.centre() - centre);
-            let mut c1 = crate::camera::Camera::look_at(eye, centre, up, c0.width, c0.height, c0.fx);
+            let mut c1 = localisebot::Camera::look_at(eye, centre, up, c0.width, c0.height, c0.fx);
             c1.cx = c0.cx;
             c1.cy = c0.cy;
             scene.cameras[1] = c1;
@@ -286,7 +284,7 @@ impl NextViewSetup {
         if metrics::pose_errors(mesh, &setup.fitted, &setup.truth).add_rel > 0.1 {
             return Ok(None);
         }
-        let model = crate::raster::silhouette::RenderMesh::new(mesh.clone());
+        let model = localisebot::raster::silhouette::RenderMesh::new(mesh.clone());
         setup.cameras = candidate_viewpoints(&model, &setup.views, &setup.fitted, candidates, shell)?;
         setup.ranked = est
             .suggest_views(Some(&setup.cameras), shell)?
@@ -327,8 +325,8 @@ impl NextViewSetup {
         Ok(Some(metrics::add(&self.mesh, &e.pose(), &self.truth)))
     }
 
-    fn view(&self, name: &str, cam: crate::camera::Camera, salt: u64) -> Result<View> {
-        let mask = crate::raster::hard::render(&self.mesh, &self.truth, &cam);
+    fn view(&self, name: &str, cam: localisebot::Camera, salt: u64) -> Result<View> {
+        let mask = localisebot::raster::hard::render(&self.mesh, &self.truth, &cam);
         let mask = roughen(
             &mask,
             self.scenes.noise_px,
@@ -396,10 +394,10 @@ pub fn camera_case(
         .enumerate()
         .map(|(i, v)| {
             let cam = *v.camera();
-            let r = crate::so3::exp(unit(&mut rng) * rotation_deg.to_radians());
+            let r = localisebot::so3::exp(unit(&mut rng) * rotation_deg.to_radians());
             let shift = unit(&mut rng) * distance * cam.centre().distance(centre);
             let mask = roughen(v.mask(), scenes.noise_px, scenes.correlation_px, seed * 64 + i as u64);
-            let off = crate::camera::Camera {
+            let off = localisebot::Camera {
                 rotation: r * cam.rotation,
                 translation: r * cam.translation + shift,
                 ..cam
@@ -409,7 +407,7 @@ pub fn camera_case(
         .collect::<Result<_>>()?;
     let mut fit = FitSettings::default();
     if refine {
-        fit.refine_cameras = Some(crate::estimator::CameraPrior::default());
+        fit.refine_cameras = Some(localisebot::CameraPrior::default());
     }
     let mut est = Estimator::new(mesh.clone(), views, None, fit)?;
     est.run(1_000_000)?;

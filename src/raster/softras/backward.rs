@@ -19,13 +19,14 @@
 //! gradient. Every entry point re-walks the prepared geometry with the tile pass
 //! (`tiles.rs`), recomputing T bit-identically, so no per-pixel lists are stored.
 
+use super::tiles::TILE;
+use super::{SoftRasterizer, SoftSilhouette, SATURATION};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::pose::Pose;
 pub use crate::raster::project::POSE_DIM;
-use crate::raster::soft::{SoftRasterizer, SoftSettings, SoftSilhouette, SATURATION};
-use crate::raster::tiles::TILE;
+use crate::raster::silhouette::SoftSettings;
 use glam::{DVec2, DVec3};
 use wide::f64x2;
 

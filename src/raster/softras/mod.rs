@@ -7,7 +7,10 @@
 //! `SoftSilhouetteShader` (`sigmoid_alpha_blend`) with σ converted from NDC² to px².
 //!
 //! Stages: pose → camera-frame points → pixels (`raster::project`, through
-//! [`SoftRasterizer::render`]), then the 2-D stage [`SoftSilhouette::render_2d`]. The backward pass is in `soft_backward.rs`.
+//! [`SoftRasterizer::render`]), then the 2-D stage [`SoftSilhouette::render_2d`]. The backward pass is in `backward.rs`.
+//!
+//! Behind the cargo feature `softras` (on by default natively, off in the shipped
+//! wasm): the reference renderer, checked against PyTorch3D, and `fit --raster softras`.
 //!
 //! Rules (all documented on the constants below): outside pairs with
 //! `d² ≥ σ·ln(1/ε − 1)` (so `D_j < ε`) are skipped; triangles whose doubled projected
@@ -30,61 +33,13 @@ use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::pose::Pose;
 use crate::raster::project::PoseProjection;
-use crate::raster::tiles::{self, Bins, Pass, Record, Tile, TriSetup};
-pub use crate::raster::tiles::{DEGENERATE_DOUBLE_AREA, SATURATION};
+use crate::raster::silhouette::SoftSettings;
+use tiles::{Bins, Pass, Record, Tile, TriSetup};
+pub use tiles::{DEGENERATE_DOUBLE_AREA, SATURATION};
+
+mod backward;
+mod tiles;
 use glam::{DVec2, DVec3};
-
-/// Softness of the soft silhouette.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SoftSettings {
-    /// σ in pixel² (default 1.0): the width of the sigmoid edge. PyTorch3D's σ in NDC²
-    /// is `σ_px = σ_ndc·(min(width, height)/2)²` (see [`SoftSettings::from_ndc`]).
-    pub sigma: f64,
-    /// ε (default 1e-4): outside pairs with `D_j < ε`, i.e. `d² ≥ σ·ln(1/ε − 1)`, are
-    /// skipped. PyTorch3D's `blur_radius = ln(1/ε − 1)·σ` with the same ε.
-    pub eps: f64,
-}
-
-impl Default for SoftSettings {
-    fn default() -> Self {
-        SoftSettings { sigma: 1.0, eps: 1e-4 }
-    }
-}
-
-impl SoftSettings {
-    /// Settings equivalent to PyTorch3D's `sigma` given in NDC² for an image of this
-    /// size (NDC spans 2 units over the shorter side), with ε = 1e-4.
-    pub fn from_ndc(sigma_ndc: f64, width: u32, height: u32) -> SoftSettings {
-        let half = width.min(height) as f64 * 0.5;
-        SoftSettings {
-            sigma: sigma_ndc * half * half,
-            eps: 1e-4,
-        }
-    }
-
-    /// The squared cut-off distance `σ·ln(1/ε − 1)` (px²) beyond which an outside
-    /// triangle contributes less than ε and is skipped.
-    pub fn cutoff_sq(&self) -> f64 {
-        self.sigma * (1.0 / self.eps - 1.0).ln()
-    }
-
-    /// Checks `σ > 0` (finite) and `0 < ε < 0.5`.
-    pub fn validate(&self) -> Result<()> {
-        if !(self.sigma.is_finite() && self.sigma > 0.0) {
-            return Err(Error::Settings(format!(
-                "soft silhouette sigma must be a positive number of pixel², got {}",
-                self.sigma
-            )));
-        }
-        if !(self.eps > 0.0 && self.eps < 0.5) {
-            return Err(Error::Settings(format!(
-                "soft silhouette eps must be in (0, 0.5), got {}",
-                self.eps
-            )));
-        }
-        Ok(())
-    }
-}
 
 /// A soft silhouette of one view, and the rasterised geometry its backward pass
 /// re-walks.

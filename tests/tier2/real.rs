@@ -58,15 +58,17 @@ fn fit_real(object: u32, images: &[u32]) -> (f64, f64, Option<Verdict>, f64) {
 
 fn check(object: u32, images: &[u32]) {
     let (add, _, verdict, _) = fit_real(object, images);
-    assert!(add < 0.1, "object {object}: ADD {:.1} % of the diameter", 100.0 * add);
+    // Measured: ADD 0.07–0.14 % of the diameter over the six objects (the bound is 4×).
+    assert!(add < 0.005, "object {object}: ADD {:.2} % of the diameter", 100.0 * add);
     assert_eq!(verdict, Some(Verdict::Ok), "object {object}");
 }
 
 fn check_symmetric(object: u32, images: &[u32]) {
     let (_, add_s, verdict, _) = fit_real(object, images);
+    // Measured: ADD-S 0.09 % (eggbox) and 0.14 % (glue).
     assert!(
-        add_s < 0.1,
-        "object {object}: ADD-S {:.1} % of the diameter",
+        add_s < 0.005,
+        "object {object}: ADD-S {:.2} % of the diameter",
         100.0 * add_s
     );
     assert_ne!(verdict, Some(Verdict::Failed), "object {object}");
