@@ -6,16 +6,16 @@
 //! ```
 //!
 //! The library reads no files itself: [`load_scene`] takes the scene's text and a
-//! resolver that returns the bytes of each file the scene names (relative to it).
+//! resolver that returns the bytes of each file the scene names (the path as written,
+//! joined onto the scene file's folder).
 
 use localisebot::{load_scene, Estimator, FitSettings, Phase};
-use std::path::Path;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args().nth(1).ok_or("usage: fit_scene SCENE.json")?;
-    let dir = Path::new(&path).parent().unwrap_or(Path::new("."));
     let text = std::fs::read_to_string(&path).map_err(|e| format!("{path}: {e}"))?;
-    let scene = load_scene(&path, &text, &|p| std::fs::read(dir.join(p)).ok())?;
+    // The resolver is asked for paths already joined onto the scene file's folder.
+    let scene = load_scene(&path, &text, &|p| std::fs::read(p).ok())?;
     println!(
         "{path}: {} views, mesh of {} triangles",
         scene.views.len(),

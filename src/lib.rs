@@ -72,6 +72,7 @@ pub mod loss;
 pub mod optim;
 #[doc(hidden)]
 pub mod raster;
+pub mod segment;
 #[doc(hidden)]
 pub mod so3;
 #[doc(hidden)]
@@ -84,8 +85,8 @@ pub mod wasm;
 pub use camera::{Camera, CameraJson, Convention, MAX_SIDE};
 pub use error::{Error, Result};
 pub use estimator::{
-    CameraCorrection, CameraPrior, CameraTest, Estimator, FitResult, FitSettings, FitSetup, Phase, PoseOut, Progress,
-    Request, Response, Shard, Termination, ViewFigures, ViewResult, OBJECT_MARGIN,
+    CameraCorrection, CameraPrior, CameraTest, Estimator, FitResult, FitSettings, FitSetup, MaskReport, Phase, PoseOut,
+    Progress, Request, Response, Shard, Termination, ViewFigures, ViewResult, OBJECT_MARGIN,
 };
 pub use io::scene::{load_scene, Scene, SceneJson, ViewJson};
 pub use loss::objective::ObjectiveSettings;
@@ -99,5 +100,5 @@ pub use pose::{mat3_from_rows, mat3_to_rows, mat4_from_rows, mat4_to_rows, Mat9,
 pub use raster::silhouette::{RasterKind, SoftSettings};
 pub use uncertainty::{NoiseModel, RankedView, StdDev, Uncertainty, Viewpoints};
 pub use verdict::{judge, Judgement, Verdict, VerdictThresholds};
-pub use view::{Rgba, View, ViewSources};
+pub use view::{PhotoView, PixelBox, Rgba, View, ViewSources};
 pub use window::{Window, WindowMode};

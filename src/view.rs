@@ -1,6 +1,8 @@
 //! A view: one calibrated photograph of the object — its camera, its binary mask, an
 //! optional `ignore` mask (pixels that are unknown: occluders, the gripper, other
-//! objects; SPEC §2) and, optionally, the image itself (for display only).
+//! objects; SPEC §2) and, optionally, the image itself (for display only). A
+//! [`PhotoView`] is a view whose mask is still to be made from its photograph, with a
+//! [`PixelBox`] around the object when the user drew one.
 //!
 //! [`View::new`] is the one door: it checks that the mask, the ignore mask and the
 //! image have the camera's size and that some object pixel is known, so every stage
@@ -189,10 +191,131 @@ impl View {
     }
 }
 
+/// A rough box around the object in an image, pixels: it covers the pixels with
+/// `x0 ≤ x < x1`, `y0 ≤ y < y1` (SPEC §3), so in the continuous coordinates of pixel
+/// centres at integers it spans `[x0 − ½, x1 − ½] × [y0 − ½, y1 − ½]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PixelBox {
+    /// Left edge (first column covered).
+    pub x0: f64,
+    /// Top edge (first row covered).
+    pub y0: f64,
+    /// Right edge (one past the last column covered).
+    pub x1: f64,
+    /// Bottom edge (one past the last row covered).
+    pub y1: f64,
+}
+
+impl PixelBox {
+    /// A box from `[x_min, y_min, x_max, y_max]` in an image of `width × height`,
+    /// validated: finite, not inverted, at least one pixel wide and high, and overlapping
+    /// the image; a box that reaches past the image's edges is clipped to it (a box a
+    /// person drags need not stop at the border). `view` names the view in errors.
+    pub fn new(view: &str, b: [f64; 4], width: u32, height: u32) -> Result<PixelBox> {
+        let bad = |problem: String| {
+            Err(Error::View {
+                view: view.into(),
+                problem: format!("box {b:?}: {problem}"),
+            })
+        };
+        if !b.iter().all(|v| v.is_finite()) {
+            return bad("holds a number that is not finite".into());
+        }
+        let [x0, y0, x1, y1] = b;
+        if x1 <= x0 || y1 <= y0 {
+            return bad(
+                "is empty or inverted: expected [x_min, y_min, x_max, y_max] with x_min < x_max and y_min < y_max"
+                    .into(),
+            );
+        }
+        let (w, h) = (width as f64, height as f64);
+        let c = PixelBox {
+            x0: x0.max(0.0),
+            y0: y0.max(0.0),
+            x1: x1.min(w),
+            y1: y1.min(h),
+        };
+        if c.x1 - c.x0 < 1.0 || c.y1 - c.y0 < 1.0 {
+            return bad(format!(
+                "covers less than one pixel of the {width}×{height} image (it must overlap the image)"
+            ));
+        }
+        Ok(c)
+    }
+
+    /// The box's centre, in pixel-centre coordinates.
+    pub fn centre(&self) -> glam::DVec2 {
+        glam::DVec2::new(0.5 * (self.x0 + self.x1) - 0.5, 0.5 * (self.y0 + self.y1) - 0.5)
+    }
+
+    /// Width and height, pixels.
+    pub fn size(&self) -> glam::DVec2 {
+        glam::DVec2::new(self.x1 - self.x0, self.y1 - self.y0)
+    }
+
+    /// The box's wire form, `[x_min, y_min, x_max, y_max]`.
+    pub fn to_array(&self) -> [f64; 4] {
+        [self.x0, self.y0, self.x1, self.y1]
+    }
+
+    /// The tight box of a mask's object pixels, `None` for an empty mask.
+    pub fn of_mask(mask: &Mask) -> Option<PixelBox> {
+        mask.bbox().map(|(x0, y0, x1, y1)| PixelBox {
+            x0: x0 as f64,
+            y0: y0 as f64,
+            x1: (x1 + 1) as f64,
+            y1: (y1 + 1) as f64,
+        })
+    }
+}
+
+/// A view whose mask is to be made from its photograph: the camera, the image, an
+/// optional ignore mask and the box around the object (`None`: the box comes from the
+/// geometry of the other views).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhotoView {
+    /// The view's name (unique within a scene).
+    pub name: String,
+    /// The camera (OpenCV axes).
+    pub camera: Camera,
+    /// The photograph, the camera's size.
+    pub image: Rgba,
+    /// Unknown pixels, when given.
+    pub ignore: Option<Mask>,
+    /// The box around the object, when given.
+    pub hint: Option<PixelBox>,
+    /// Its position among the scene's views.
+    pub index: usize,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use glam::{DMat3, DVec3};
+
+    #[test]
+    fn boxes_are_validated_and_clipped() {
+        let b = PixelBox::new("v", [-5.0, 10.0, 30.5, 900.0], 64, 48).unwrap();
+        assert_eq!(b.to_array(), [0.0, 10.0, 30.5, 48.0]);
+        assert_eq!(b.size(), glam::DVec2::new(30.5, 38.0));
+        for (bad, says) in [
+            ([10.0, 0.0, 5.0, 9.0], "inverted"),
+            ([1.0, 1.0, 1.0, 9.0], "empty"),
+            ([f64::NAN, 0.0, 5.0, 9.0], "not finite"),
+            ([70.0, 0.0, 90.0, 9.0], "overlap the image"),
+            ([0.0, -20.0, 9.0, -1.0], "overlap the image"),
+        ] {
+            let e = PixelBox::new("left", bad, 64, 48).unwrap_err().to_string();
+            assert!(e.contains("view 'left'") && e.contains(says), "{e}");
+        }
+        let mut m = Mask::empty(10, 8);
+        assert_eq!(PixelBox::of_mask(&m), None);
+        m.data[3 * 10 + 2] = 1;
+        m.data[5 * 10 + 6] = 1;
+        let t = PixelBox::of_mask(&m).unwrap();
+        assert_eq!(t.to_array(), [2.0, 3.0, 7.0, 6.0]);
+        assert_eq!(t.centre(), glam::DVec2::new(4.0, 4.0));
+    }
 
     fn camera(w: u32, h: u32) -> Camera {
         Camera::look_at(DVec3::new(0.0, 0.0, -2.0), DVec3::ZERO, DVec3::Y, w, h, 50.0)

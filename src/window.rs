@@ -8,7 +8,7 @@
 
 use crate::camera::Camera;
 use crate::mask::Mask;
-use crate::view::View;
+use crate::view::{PixelBox, View};
 use glam::DVec2;
 
 /// A rectangle of an image, in continuous pixel coordinates (pixel centres at
@@ -54,17 +54,20 @@ impl Window {
     /// its edges on pixel edges (so that at full resolution its pixels are the image's);
     /// `None` for an empty mask.
     pub fn around_mask(mask: &Mask, margin: f64) -> Option<Window> {
-        let (x0, y0, x1, y1) = mask.bbox()?;
-        let (cx, cy) = ((x0 + x1) as f64 * 0.5, (y0 + y1) as f64 * 0.5);
-        let side = ((x1 - x0 + 1).max(y1 - y0 + 1) as f64 * (1.0 + 2.0 * margin.max(0.0)))
-            .ceil()
-            .max(8.0);
-        Some(Window {
-            x0: (cx - side * 0.5).round() - 0.5,
-            y0: (cy - side * 0.5).round() - 0.5,
+        PixelBox::of_mask(mask).map(|b| Window::around_box(&b, margin))
+    }
+
+    /// A square around the pixels `box` covers, as [`Window::around_mask`] around a mask
+    /// whose bounds they are.
+    pub fn around_box(b: &PixelBox, margin: f64) -> Window {
+        let c = b.centre();
+        let side = (b.size().max_element() * (1.0 + 2.0 * margin.max(0.0))).ceil().max(8.0);
+        Window {
+            x0: (c.x - side * 0.5).round() - 0.5,
+            y0: (c.y - side * 0.5).round() - 0.5,
             width: side,
             height: side,
-        })
+        }
     }
 
     /// The window of `view` under `mode`.

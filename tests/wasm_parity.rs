@@ -44,7 +44,8 @@ fn bless_scene() {
             ignore: None,
             name: v.name().to_string(),
             image: None,
-            mask: rel,
+            mask: Some(rel),
+            hint_box: None,
             camera: CameraJson::from_camera(v.camera()),
         });
     }

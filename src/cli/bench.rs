@@ -9,7 +9,7 @@
 //! (Linemod-Occluded, imported from `../shared`). Or the same evaluation on a given
 //! scene at a given pose.
 
-use super::files::{load_mesh, load_pose, load_scene_file, CliResult};
+use super::files::{load_masked_scene_file, load_mesh, load_pose, CliResult};
 use localisebot::app::shapes;
 use localisebot::app::synth::{blob_mesh, synthesize, SynthSettings};
 use localisebot::io::bop::{self, BopOptions, MaskKind};
@@ -118,7 +118,7 @@ fn evaluations(a: &BenchArgs, raster: RasterKind) -> CliResult<Vec<Row>> {
     let reps = a.reps.max(1);
     let mut rows = Vec::new();
     if let Some(scene_path) = &a.scene {
-        let scene = load_scene_file(scene_path)?;
+        let scene = load_masked_scene_file(scene_path, "bench")?;
         let pose = load_pose(a.pose.as_ref().expect("clap requires --pose with --scene"))?;
         let size = scene
             .views

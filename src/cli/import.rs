@@ -91,6 +91,18 @@ pub struct BopArgs {
     /// visible masks (occluders become unknown pixels).
     #[arg(long, value_enum)]
     ignore: Option<IgnoreArg>,
+    /// Give the views boxes made from the annotated masks (10 % margin, edges moved by
+    /// up to ±5 %, as a person drags them) and their photographs instead of masks: the
+    /// photograph path on an annotated dataset.
+    #[arg(long)]
+    boxes: bool,
+    /// With --boxes: only the first N views get a box (the others' boxes come from the
+    /// geometry).
+    #[arg(long, requires = "boxes")]
+    boxes_in: Option<usize>,
+    /// With --boxes: the seed of the edges' random moves.
+    #[arg(long, default_value_t = 1, requires = "boxes")]
+    box_seed: u64,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -123,6 +135,12 @@ pub fn run(cmd: &ImportCommand) -> CliResult {
                 UnitArg::Mm => Units::Millimetres,
             };
             o.ignore_others = matches!(a.ignore, Some(IgnoreArg::Others));
+            o.boxes = a.boxes.then_some(bop::BoxHints {
+                margin: 0.1,
+                jitter: 0.05,
+                seed: a.box_seed,
+                views_with_box: a.boxes_in.unwrap_or(usize::MAX),
+            });
             o.masks = match a.masks {
                 MaskArg::Full => MaskKind::Full,
                 MaskArg::Visib => MaskKind::Visible,

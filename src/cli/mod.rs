@@ -9,6 +9,7 @@ mod import;
 mod info;
 mod loss;
 mod render;
+mod segmenter;
 mod suggest;
 mod synth;
 

@@ -2,7 +2,7 @@
 //! image or mask, the mask outline, the contour rendered at the pose and the scene's
 //! grasp rectangles), and each view's grasp rectangles as an OCID/Cornell `.txt`.
 
-use super::files::{load_pose, load_scene_file, write, CliResult};
+use super::files::{load_masked_scene_file, load_pose, write, CliResult};
 use localisebot::app::{grasp, overlay};
 use localisebot::io::png::encode_rgba;
 use localisebot::{metrics, raster::hard};
@@ -10,7 +10,7 @@ use std::path::Path;
 
 /// Runs `render`.
 pub fn run(scene: &Path, pose: &Path, out: &Path) -> CliResult {
-    let scene = load_scene_file(scene)?;
+    let scene = load_masked_scene_file(scene, "render")?;
     let pose = load_pose(pose)?;
     for v in &scene.views {
         let rendered = hard::render_checked(v.name(), &scene.mesh, &pose, v.camera()).map_err(|e| e.to_string())?;

@@ -7,7 +7,7 @@
 //! JSON list of camera objects in the scene file's form (best first, ready to add to
 //! the scene), and their predicted figures on standard error.
 
-use super::files::{load_pose, load_scene_file, read_text, to_json, CliResult};
+use super::files::{load_masked_scene_file, load_pose, read_text, to_json, CliResult};
 use super::fit::ScaleArg;
 use clap::Args;
 use localisebot::uncertainty::Viewpoints;
@@ -53,7 +53,7 @@ pub enum ViewpointsArg {
 
 /// Runs `suggest-view`.
 pub fn run(a: &SuggestArgs) -> CliResult<()> {
-    let scene = load_scene_file(&a.scene)?;
+    let scene = load_masked_scene_file(&a.scene, "suggest-view")?;
     let pose = load_pose(&a.result)?;
     let fit = fit_of(&a.result, &scene.views)?;
     if a.candidates.is_some() && a.viewpoints.is_some() {

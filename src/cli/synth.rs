@@ -130,7 +130,8 @@ pub fn run(a: &SynthArgs) -> CliResult {
             ignore,
             name,
             image,
-            mask: rel,
+            mask: Some(rel),
+            hint_box: None,
             camera: CameraJson::from_camera(cam),
         });
     }

@@ -35,7 +35,7 @@ mod shard;
 
 pub use cameras::{CameraCorrection, CameraPrior, CameraTest};
 pub use finish::ViewFigures;
-pub use result::{FitResult, PoseOut, ViewResult};
+pub use result::{FitResult, MaskReport, PoseOut, ViewResult};
 pub use settings::{FitSettings, Phase, Progress, Termination, OBJECT_MARGIN};
 pub use setup::FitSetup;
 pub use shard::{Request, Response, Shard};

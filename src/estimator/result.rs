@@ -122,6 +122,29 @@ pub struct FitResult {
     /// ground truth was given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub symmetric: Option<bool>,
+    /// The masks the fit made from photographs, and how they came about (absent when
+    /// every view gave its mask).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub masks: Vec<MaskReport>,
+}
+
+/// How one mask made from a photograph came about (an entry of the result's `masks`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MaskReport {
+    /// The view's name.
+    pub view: String,
+    /// Where its first box came from: `"box"` (the scene's) or `"geometry"`.
+    pub first_box_from: String,
+    /// The first box, image pixels `[x_min, y_min, x_max, y_max]`.
+    pub first_box: [f64; 4],
+    /// Object pixels of each round's mask.
+    pub areas: Vec<usize>,
+    /// IoU of each round's mask with the previous round's (one fewer than `areas`).
+    pub changes: Vec<f64>,
+    /// The segmenter's own IoU estimate for the final mask.
+    pub score: f32,
+    /// IoU of the final mask with the silhouette of the final pose.
+    pub iou_with_fit: f64,
 }
 
 fn anisotropic() -> ScaleMode {
@@ -190,6 +213,7 @@ impl Estimator {
             seconds,
             errors,
             symmetric,
+            masks: Vec::new(),
         }
     }
 }

@@ -76,6 +76,25 @@ pub struct BopOptions {
     /// Write, for each view, the union of the *other* annotated objects' visible
     /// masks (`mask_visib/`) as its ignore mask: occluders become unknown pixels.
     pub ignore_others: bool,
+    /// Give views boxes (made from the annotated masks, as a person would drag them)
+    /// and their photographs instead of the masks: to try the photograph path on an
+    /// annotated dataset.
+    pub boxes: Option<BoxHints>,
+}
+
+/// Boxes made from annotated masks (`BopOptions::boxes`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoxHints {
+    /// Margin added on each side, as a fraction of the tight box's side (e.g. 0.1).
+    pub margin: f64,
+    /// Each edge then moved by a uniform random amount up to this fraction of the side
+    /// (e.g. 0.05).
+    pub jitter: f64,
+    /// The random generator's seed.
+    pub seed: u64,
+    /// Only the first this many views get a box; the others only their photograph (their
+    /// box comes from the geometry). `usize::MAX`: every view.
+    pub views_with_box: usize,
 }
 
 impl BopOptions {
@@ -92,6 +111,7 @@ impl BopOptions {
             masks: MaskKind::Full,
             units: Units::Metres,
             ignore_others: false,
+            boxes: None,
         }
     }
 }
@@ -264,7 +284,24 @@ pub fn import(files: Resolver, opts: &BopOptions) -> Result<Imported> {
             files_out.push((rel.clone(), bytes));
             rel
         });
-        files_out.push((c.mask_rel.clone(), c.mask_bytes));
+        let (mask, hint_box) = match opts.boxes {
+            None => {
+                files_out.push((c.mask_rel.clone(), c.mask_bytes));
+                (Some(c.mask_rel), None)
+            }
+            Some(h) => {
+                if image.is_none() {
+                    return Err(Error::View {
+                        view: name,
+                        problem: "boxes instead of masks need the photograph (rgb/), which is not there".into(),
+                    });
+                }
+                let b = (views.len() < h.views_with_box)
+                    .then(|| hint_box(&c.mask_bytes, &c.mask_rel, &name, &h, views.len() as u64))
+                    .transpose()?;
+                (None, b)
+            }
+        };
         let ignore = c.ignore.map(|(rel, bytes)| {
             files_out.push((rel.clone(), bytes));
             rel
@@ -273,7 +310,8 @@ pub fn import(files: Resolver, opts: &BopOptions) -> Result<Imported> {
             ignore,
             name,
             image,
-            mask: c.mask_rel,
+            mask,
+            hint_box,
             camera,
         });
     }
@@ -290,6 +328,29 @@ pub fn import(files: Resolver, opts: &BopOptions) -> Result<Imported> {
         files: files_out,
         warnings,
     })
+}
+
+/// A box around an annotated mask as a person would drag it (`BoxHints`); `salt`
+/// makes each view's draw its own.
+fn hint_box(mask_png: &[u8], file: &str, view: &str, h: &BoxHints, salt: u64) -> Result<[f64; 4]> {
+    use rand::{Rng, SeedableRng};
+    let mask = decode_mask(mask_png, view, file)?;
+    let b = crate::view::PixelBox::of_mask(&mask).ok_or_else(|| Error::EmptyMask {
+        view: view.into(),
+        file: file.into(),
+        ignored: false,
+    })?;
+    let mut rng = rand::rngs::SmallRng::seed_from_u64(h.seed.wrapping_mul(1_000_003).wrapping_add(salt));
+    let (w, ht) = (b.x1 - b.x0, b.y1 - b.y0);
+    let mut edge =
+        |v: f64, side: f64, out: f64| v + out * h.margin * side + h.jitter * side * rng.gen_range(-1.0..=1.0);
+    let r = [
+        edge(b.x0, w, -1.0),
+        edge(b.y0, ht, -1.0),
+        edge(b.x1, w, 1.0),
+        edge(b.y1, ht, 1.0),
+    ];
+    Ok(r.map(|v| (v * 10.0).round() / 10.0))
 }
 
 /// Gathers one image's camera, pose and mask, or `None` (with a warning) when the

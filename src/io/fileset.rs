@@ -439,15 +439,21 @@ impl FileSet {
         let mut found: Vec<(String, &[u8])> = Vec::new();
         let mut warnings = Vec::new();
         for v in &mut json.views {
-            let mask = self
-                .find_entry(&join(dir, &v.mask), FileRole::Mask)
-                .map_err(|problem| Error::Mask {
-                    view: v.name.clone(),
-                    file: v.mask.clone(),
-                    problem,
-                })?
-                .ok_or_else(|| missing(join(dir, &v.mask)))?;
-            found.push((v.mask.clone(), &mask.1));
+            let mask = match &v.mask {
+                None => None,
+                Some(file) => {
+                    let entry = self
+                        .find_entry(&join(dir, file), FileRole::Mask)
+                        .map_err(|problem| Error::Mask {
+                            view: v.name.clone(),
+                            file: file.clone(),
+                            problem,
+                        })?
+                        .ok_or_else(|| missing(join(dir, file)))?;
+                    found.push((file.clone(), &entry.1));
+                    Some(entry)
+                }
+            };
             if let Some(ignore) = &v.ignore {
                 let entry = self
                     .find_entry(&join(dir, ignore), FileRole::Mask)
@@ -461,8 +467,8 @@ impl FileSet {
             }
             let Some(image) = v.image.take() else { continue };
             match self.find_entry(&join(dir, &image), FileRole::Image) {
-                Ok(Some(entry)) if !std::ptr::eq(entry, mask) => {
-                    let key = if image == v.mask {
+                Ok(Some(entry)) if mask.is_none_or(|m| !std::ptr::eq(entry, m)) => {
+                    let key = if v.mask.as_ref() == Some(&image) {
                         format!("{image}#image")
                     } else {
                         image
@@ -470,6 +476,8 @@ impl FileSet {
                     found.push((key.clone(), &entry.1));
                     v.image = Some(key);
                 }
+                // Without a mask the photograph is what the mask is made from.
+                Ok(_) if mask.is_none() => return Err(missing(join(dir, &image))),
                 Ok(_) => warnings.push(format!(
                     "view '{}': image '{image}' not given: showing the mask",
                     v.name
@@ -598,7 +606,8 @@ mod tests {
                 ignore: None,
                 name: v.name().to_string(),
                 image: Some(format!("images/{}.png", v.name())),
-                mask: format!("masks/{}.png", v.name()),
+                mask: Some(format!("masks/{}.png", v.name())),
+                hint_box: None,
                 camera,
             });
         }

@@ -196,7 +196,8 @@ pub fn import(transforms_file: &str, text: &str, files: Resolver, mesh_file: &st
             ignore: None,
             name,
             image: Some(image_rel),
-            mask: mask_rel,
+            mask: Some(mask_rel),
+            hint_box: None,
             camera,
         });
     }

@@ -11,8 +11,6 @@ use glam::{DMat3, DVec3};
 /// centroid. With one view (or parallel rays) the depth along the ray is taken from
 /// `fallback_depth(view)`.
 pub fn triangulate_centre(views: &[View], fallback_depth: impl Fn(&View) -> f64) -> Result<DVec3> {
-    let mut a = DMat3::ZERO;
-    let mut b = DVec3::ZERO;
     let mut rays = Vec::with_capacity(views.len());
     for v in views {
         let c = v.mask().centroid().ok_or_else(|| Error::EmptyMask {
@@ -20,21 +18,10 @@ pub fn triangulate_centre(views: &[View], fallback_depth: impl Fn(&View) -> f64)
             file: "mask".into(),
             ignored: false,
         })?;
-        let o = v.camera().centre();
-        let d = v.camera().ray_direction(c.x, c.y);
-        let p = DMat3::IDENTITY - DMat3::from_cols(d * d.x, d * d.y, d * d.z);
-        a += p;
-        b += p * o;
-        rays.push((o, d));
+        rays.push((v.camera().centre(), v.camera().ray_direction(c.x, c.y)));
     }
-    // Well-conditioned when the rays are not all parallel: the smallest eigenvalue of
-    // A is then clearly positive. Test through the determinant relative to its scale.
-    let n = views.len() as f64;
-    if views.len() >= 2 && a.determinant() > 1e-6 * n * n * n {
-        let x = a.inverse() * b;
-        if x.is_finite() {
-            return Ok(x);
-        }
+    if let Some(x) = nearest_point(&rays) {
+        return Ok(x);
     }
     // One view or parallel rays: the mean of the points at the fallback depth.
     let mut sum = DVec3::ZERO;
@@ -44,7 +31,24 @@ pub fn triangulate_centre(views: &[View], fallback_depth: impl Fn(&View) -> f64)
         let axis = v.camera().rotation.transpose() * DVec3::Z;
         sum += o + d * (z / d.dot(axis).max(1e-6));
     }
-    Ok(sum / n)
+    Ok(sum / views.len() as f64)
+}
+
+/// The point closest, in the least-squares sense, to the rays `(origin, unit
+/// direction)`; `None` for fewer than two rays or (nearly) parallel ones.
+pub fn nearest_point(rays: &[(DVec3, DVec3)]) -> Option<DVec3> {
+    let mut a = DMat3::ZERO;
+    let mut b = DVec3::ZERO;
+    for &(o, d) in rays {
+        let p = DMat3::IDENTITY - DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+        a += p;
+        b += p * o;
+    }
+    // Well-conditioned when the rays are not all parallel: the smallest eigenvalue of
+    // A is then clearly positive. Test through the determinant relative to its scale.
+    let n = rays.len() as f64;
+    let x = a.inverse() * b;
+    (rays.len() >= 2 && a.determinant() > 1e-6 * n * n * n && x.is_finite()).then_some(x)
 }
 
 /// The area of the triangles' surface (model units²).

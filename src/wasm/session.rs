@@ -79,6 +79,7 @@ impl Session {
     }
 
     fn from_loaded(scene: crate::io::scene::Scene, warnings: Vec<String>) -> Result<Session> {
+        scene.require_masks("the page")?;
         let mut session = Session::new(scene.mesh, scene.views, scene.initial_pose, scene.ground_truth_pose)?;
         session.warnings = warnings;
         session.grasps = scene.grasps;

@@ -25,6 +25,7 @@ pub const MAX_SHARDS: u32 = 64;
 
 impl WorkerShard {
     fn from_scene(scene: Scene, mine: Vec<usize>) -> Result<WorkerShard> {
+        scene.require_masks("a pool worker")?;
         let views = scene.views.len();
         if mine.is_empty() {
             return Err(Error::Settings("shard: it owns no view".into()));

@@ -63,7 +63,8 @@ fn nerf_lego_six_views() {
         assert!(pc.z > 0.0);
         let uv = cam.project(pc);
         assert!((uv - DVec2::splat(399.5)).length() < 0.01, "{}: origin at {uv}", v.name);
-        let mask = decode_mask(file(&imp, &v.mask), &v.name, &v.mask).unwrap();
+        let mask_file = v.mask.as_deref().unwrap();
+        let mask = decode_mask(file(&imp, mask_file), &v.name, mask_file).unwrap();
         assert!(
             (mask.area() as f64 - area as f64).abs() <= 0.01 * area as f64,
             "{}: {}",

