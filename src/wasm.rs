@@ -19,7 +19,8 @@
 //! - `shard`: [`WorkerShard`] (`Shard` in JavaScript), a pool Worker's share of a
 //!   session's work, built once from the session's files;
 //! - `scene_view`: what the page's 3D view draws, a second `impl Session` block
-//!   (`geometry`, `cameras`, `viewPicture`);
+//!   (`geometry`, `cameras`, `viewPicture`, `cameraFrames`, `ghosts`), and
+//!   `framesOfCameras`;
 //! - `next_view`: `Session.suggestViews`, the cameras for the next photograph;
 //! - `cameras`: `Session.setRefineCameras`, the camera-correction switch.
 
@@ -33,7 +34,7 @@ mod shard;
 
 pub use builder::SessionBuilder;
 pub use files::{check_mesh, mesh_files, scene_files, FileRole, FileSet, Plan};
-pub use scene_view::{display_mesh, MAX_DISPLAY_TRIANGLES};
+pub use scene_view::{display_mesh, frames_of_cameras, MAX_DISPLAY_TRIANGLES};
 pub use session::Session;
 pub use shard::WorkerShard;
 
@@ -82,6 +83,8 @@ export interface Progress {
   /** Seconds spent in step() so far. */
   seconds: number;
   pose: PoseOut;
+  /** The pose's object-to-world 4×4 `[R·diag(s) | t]`, rows (as FitResult's `matrix`). */
+  matrix: number[][];
 }
 /** One view's name and size. */
 export interface ViewInfo { name: string; width: number; height: number; has_image: boolean; }

@@ -25,6 +25,8 @@ function startWorker() {
   if (poolParam !== null) url.searchParams.set('pool', poolParam);
   worker = new Worker(url, { type: 'module' });
   worker.onmessage = ({ data }) => handlers[data.type]?.(data);
+  // A worker started again (after a trap) still knows the 3D view's shape.
+  if (scene3dState.view) send('aspect3d', { aspect: scene3dState.view.aspect() });
   worker.onerror = (e) => {
     e.preventDefault();
     showError(`the worker failed to start: ${e.message || 'could the wasm package (www/pkg/) be missing?'}`);
@@ -244,7 +246,7 @@ function paint() {
   showVerdict(p);
   drawLoss(msg.losses);
   showPose(p.pose);
-  to3d({ pose: p.pose });
+  to3d({ pose: p.matrix });
   ui.status.textContent = statusText(p);
   paintCount++;
   ui.status.dataset.paints = paintCount;
@@ -333,6 +335,7 @@ import('./view3d.js')
   .then((view) => {
     scene3dState.view = view;
     view.apply(scene3dState.waiting);
+    send('aspect3d', { aspect: view.aspect() }); // where its viewer starts (the next scene's)
   })
   .catch((e) => {
     $('view3d').textContent = `3D view unavailable: ${e.message}`;

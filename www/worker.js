@@ -2,9 +2,9 @@
 // waits for it. Which dropped file is the scene, the mesh, a mask or an image is
 // decided in Rust (Session.fromFiles); this file only moves bytes and messages.
 // Messages in: load {files}, example {path}, start, pause, step, reset, result,
-// view {full}, cameras {on}. Messages out: loaded {views, warnings, pool},
+// view {full}, cameras {on}, aspect3d {aspect}. Messages out: loaded {views, warnings, pool},
 // frame {progress, losses, overlays, size, running, pool},
-// result {json}, error {message, fatal}, view3d {scene | covariance, suggestions},
+// result {json}, error {message, fatal}, view3d {scene | ghosts, suggestions},
 // cameras {corrections, error} (the 3D view's and the corrections, at the end of this
 // file). Every error — a load, a command, or a slice
 // of the fitting loop — is caught and posted as an error, and the loop stops.
@@ -16,7 +16,7 @@
 // N from `?pool=N` in this worker's URL (main.js passes on the page's) or else
 // hardwareConcurrency; no pool below 2 (`?pool=0` or `?pool=1`: none). Without a pool (one core, a pool that failed to start, or after a pool
 // error until the next load) the Session steps here, with stepFor.
-import init, { FileSet, Session, sceneFiles, meshFiles } from './pkg/localisebot.js';
+import init, { FileSet, Session, sceneFiles, meshFiles, framesOfCameras } from './pkg/localisebot.js';
 
 const BUDGET_MS = 30; // work per frame: about 30 frames a second while fitting
 const WINDOW_PX = 256; // side of an object-window overlay
@@ -337,24 +337,37 @@ const handlers = {
     fullFrame = Boolean(msg.full);
     return exclusive(() => session && frame());
   },
+  // The 3D view's width/height, for where its viewer starts (the next scene's).
+  aspect3d: (msg) => {
+    aspect3d = Number(msg.aspect) || 1;
+  },
 };
 
 // ---- 3D view (www/view3d.js) --------------------------------------------------------
-// After a load: the mesh for display, the cameras and each view's picture. When the
-// fit is done: the result's covariance (null until the result has one) and, when the
-// wasm has Session.suggestViews, the 3 best next views (from the upper half of the
-// sphere with "next view from above"). When it is no longer done
-// (Reset), both are cleared. A failure here is reported to the page's 3D view only.
+// After a load: the mesh for display, the cameras, each view's picture and the frames
+// Rust computes for drawing them (Session.cameraFrames). When the fit is done: GHOSTS
+// ghosts of the result (Session.ghosts: object-to-world matrices drawn from its
+// covariance, seeded; none until the result has one) and, when the wasm has
+// Session.suggestViews, the 3 best next views (from the upper half of the sphere with
+// "next view from above"), each with its frame (framesOfCameras). When it is no longer
+// done (Reset), both are cleared. A failure here is reported to the page's 3D view only.
 const PICTURE_PX = 512; // longest side of a view's picture on its image plane
+const GHOSTS = 12; // ghosts drawn
+const GHOST_SEED = 1; // the same ghosts every time
 let finished3d = false;
+let aspect3d = 1; // the 3D view's width/height (main.js sends it)
+let depth3d = null; // the scene's image-plane depth, for the suggestions' frusta
 
 function scene3d() {
   finished3d = false;
+  depth3d = null;
   try {
     const geometry = session.geometry();
     const cameras = session.cameras();
     const pictures = cameras.map((_, i) => session.viewPicture(i, PICTURE_PX));
-    post({ type: 'view3d', scene: { geometry, cameras, pictures } },
+    const frames = session.cameraFrames(aspect3d);
+    depth3d = frames.depth;
+    post({ type: 'view3d', scene: { geometry, cameras, pictures, frames } },
       [geometry.positions.buffer, geometry.indices.buffer, ...pictures.map((p) => p.rgba.buffer)]);
   } catch (e) {
     post({ type: 'view3d', error: e?.message ?? String(e) });
@@ -365,14 +378,14 @@ function done3d(progress) {
   if (progress.done === finished3d) return;
   finished3d = progress.done;
   if (!progress.done) {
-    post({ type: 'view3d', covariance: null, suggestions: null });
+    post({ type: 'view3d', ghosts: null, suggestions: null });
     post({ type: 'cameras', corrections: null, error: null });
     return;
   }
-  const msg = { type: 'view3d', covariance: null, suggestions: null };
+  const msg = { type: 'view3d', ghosts: null, suggestions: null };
   try {
     const result = session.result();
-    msg.covariance = result.covariance ?? null;
+    msg.ghosts = session.ghosts(GHOSTS, GHOST_SEED);
     post({ type: 'cameras', corrections: result.camera_corrections ?? null, test: result.camera_test ?? null, error: result.camera_correction_error ?? null });
     msg.suggestions = suggestions();
   } catch (e) {
@@ -381,10 +394,13 @@ function done3d(progress) {
   post(msg);
 }
 
-// The 3 best next views from the chosen viewpoints (null when the wasm has none).
+// The 3 best next views from the chosen viewpoints, each with its frame for the 3D
+// view (null when the wasm has none).
 function suggestions() {
   if (typeof session.suggestViews !== 'function') return null;
-  return session.suggestViews(3, suggestAbove ? 'above' : 'sphere');
+  const list = session.suggestViews(3, suggestAbove ? 'above' : 'sphere');
+  const frames = framesOfCameras(list.map((s) => s.camera), depth3d ?? session.cameraFrames().depth);
+  return list.map((s, i) => ({ ...s, frame: frames[i] }));
 }
 
 // The suggestions again, after the viewpoints changed on a finished fit.

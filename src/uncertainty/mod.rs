@@ -278,6 +278,40 @@ fn sampled_add(points: &[DVec3], pose: &Pose, cov: &Mat9, n: usize) -> (f64, f64
     (mean, adds[(n * 95 / 100).min(n - 1)])
 }
 
+/// `count` poses drawn from N(pose, cov) — the 3D view's ghosts: `pose.perturbed(L·z)`,
+/// z standard normal from a generator seeded with `seed` (the same ghosts every time),
+/// L a factor of the covariance (symmetrised) in `[ω (right tangent, R·exp([ω]×)), t,
+/// log s]`. A semi-definite covariance draws in its range only (a zero covariance gives
+/// `pose` itself); an indefinite one has its negative eigenvalues clipped to zero.
+///
+/// Errors: a covariance holding a non-finite number.
+pub fn ghost_poses(pose: &Pose, cov: &Mat9, count: usize, seed: u64) -> Result<Vec<Pose>> {
+    let sym = (cov + cov.transpose()) * 0.5;
+    let l = psd_factor(&sym)
+        .ok_or_else(|| Error::Settings("ghost poses: the covariance holds a number that is not finite".into()))?;
+    let mut rng = SmallRng::seed_from_u64(seed);
+    Ok((0..count)
+        .map(|_| {
+            let z = Vec9::from_fn(|_, _| normal(&mut rng));
+            pose.perturbed(&(l * z))
+        })
+        .collect())
+}
+
+/// A 9×9 covariance from its rows (as the result file writes it).
+///
+/// Errors: not 9 rows of 9 numbers.
+pub fn mat9_from_rows(rows: &[Vec<f64>]) -> Result<Mat9> {
+    if rows.len() != DIM || rows.iter().any(|r| r.len() != DIM) {
+        let shape: Vec<usize> = rows.iter().map(Vec::len).collect();
+        return Err(Error::Settings(format!(
+            "a pose covariance is 9×9 in [ω, t, log s], got {} rows of {shape:?} numbers",
+            rows.len()
+        )));
+    }
+    Ok(Mat9::from_fn(|i, j| rows[i][j]))
+}
+
 /// A factor L with `L Lᵀ = cov` (eigen-decomposition; negative round-off clipped).
 fn psd_factor(cov: &Mat9) -> Option<Mat9> {
     if !cov.iter().all(|v| v.is_finite()) {
@@ -378,6 +412,112 @@ mod tests {
         let e = Vec9::from_column_slice(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.01, 0.01, 0.01]);
         let d2 = mahalanobis_sq(&iso, &e, ScaleMode::Isotropic).unwrap();
         assert!((d2 - 1.0).abs() < 1e-6, "{d2}");
+    }
+
+    fn some_pose() -> Pose {
+        Pose {
+            rotation: so3::exp(DVec3::new(0.3, -0.2, 0.9)),
+            translation: DVec3::new(0.1, 2.0, -1.0),
+            scale: DVec3::new(1.2, 0.8, 1.0),
+        }
+    }
+
+    /// The sample covariance of the ghosts' coordinates `[ω, t, log s]` about `pose`.
+    fn sample_covariance(pose: &Pose, ghosts: &[Pose]) -> Mat9 {
+        let e: Vec<Vec9> = ghosts.iter().map(|g| pose_error(pose, g)).collect();
+        let n = e.len() as f64;
+        let mean = e.iter().sum::<Vec9>() / n;
+        e.iter().map(|x| (x - mean) * (x - mean).transpose()).sum::<Mat9>() / (n - 1.0)
+    }
+
+    #[test]
+    fn ghosts_of_a_zero_covariance_are_the_pose() {
+        let pose = some_pose();
+        let ghosts = ghost_poses(&pose, &Mat9::zeros(), 5, 1).unwrap();
+        assert_eq!(ghosts.len(), 5);
+        for g in &ghosts {
+            assert!(g.rotation.abs_diff_eq(pose.rotation, 1e-12), "{g:?}");
+            assert_eq!(g.translation, pose.translation);
+            assert_eq!(g.scale, pose.scale);
+        }
+        assert!(ghost_poses(&pose, &Mat9::zeros(), 0, 1).unwrap().is_empty());
+    }
+
+    #[test]
+    fn ghosts_follow_the_covariance_and_the_seed() {
+        let pose = some_pose();
+        // Correlated: σ 0.05 rad, 0.01 units, 2 % in scale; ω_x with t_y, t_x with ls_z.
+        let sd = [0.05, 0.04, 0.03, 0.01, 0.012, 0.008, 0.02, 0.015, 0.01];
+        let mut cov = Mat9::from_fn(|i, j| if i == j { sd[i] * sd[j] } else { 0.0 });
+        for (i, j, r) in [(0, 4, 0.6), (3, 8, -0.5), (6, 7, 0.3)] {
+            cov[(i, j)] = r * sd[i] * sd[j];
+            cov[(j, i)] = cov[(i, j)];
+        }
+        let n = 20_000;
+        let ghosts = ghost_poses(&pose, &cov, n, 7).unwrap();
+        let s = sample_covariance(&pose, &ghosts);
+        for i in 0..DIM {
+            for j in 0..DIM {
+                // The sample covariance's standard error, five times.
+                let se = ((cov[(i, i)] * cov[(j, j)] + cov[(i, j)].powi(2)) / n as f64).sqrt();
+                assert!(
+                    (s[(i, j)] - cov[(i, j)]).abs() < 5.0 * se,
+                    "({i}, {j}): sample {} vs {}",
+                    s[(i, j)],
+                    cov[(i, j)]
+                );
+            }
+        }
+        // Seeded: the same ghosts again; another seed, others.
+        assert_eq!(ghost_poses(&pose, &cov, 3, 7).unwrap(), ghosts[..3].to_vec());
+        assert_ne!(ghost_poses(&pose, &cov, 3, 8).unwrap(), ghosts[..3].to_vec());
+    }
+
+    #[test]
+    fn singular_and_indefinite_covariances_give_finite_ghosts() {
+        let pose = some_pose();
+        // Singular: only t_x uncertain; the ghosts move along x only.
+        let mut singular = Mat9::zeros();
+        singular[(3, 3)] = 1e-4;
+        let ghosts = ghost_poses(&pose, &singular, 12, 1).unwrap();
+        for g in &ghosts {
+            let e = pose_error(&pose, g);
+            assert!(e.iter().all(|v| v.is_finite()));
+            for k in (0..DIM).filter(|&k| k != 3) {
+                assert!(e[k].abs() < 1e-12, "coordinate {k} moved: {e}");
+            }
+        }
+        assert!(ghosts
+            .iter()
+            .any(|g| (g.translation.x - pose.translation.x).abs() > 1e-3));
+        // Indefinite (a negative eigenvalue): clipped to the nearest semi-definite matrix.
+        let mut indefinite = Mat9::identity() * 1e-4;
+        indefinite[(3, 4)] = 2e-4;
+        indefinite[(4, 3)] = 2e-4;
+        assert!(indefinite.symmetric_eigen().eigenvalues.min() < 0.0);
+        let ghosts = ghost_poses(&pose, &indefinite, 2000, 1).unwrap();
+        assert!(ghosts.iter().all(|g| g.matrix().is_finite()));
+        // Along (1, −1)/√2 in (t_x, t_y) the eigenvalue −1e-4 is clipped: no spread there.
+        let along: Vec<f64> = ghosts
+            .iter()
+            .map(|g| (g.translation.x - pose.translation.x) - (g.translation.y - pose.translation.y))
+            .collect();
+        assert!(along.iter().all(|v| v.abs() < 1e-12), "{:?}", &along[..3]);
+    }
+
+    #[test]
+    fn a_covariance_that_is_not_finite_or_not_9_by_9_is_an_error() {
+        let mut cov = Mat9::identity() * 1e-4;
+        cov[(2, 5)] = f64::NAN;
+        assert!(ghost_poses(&Pose::IDENTITY, &cov, 12, 1).is_err());
+        cov[(2, 5)] = f64::INFINITY;
+        assert!(ghost_poses(&Pose::IDENTITY, &cov, 12, 1).is_err());
+        assert!(mat9_from_rows(&[vec![1.0, 0.0], vec![0.0, 1.0]]).is_err());
+        let mut rows = vec![vec![0.0; 9]; 9];
+        rows[8].pop();
+        assert!(mat9_from_rows(&rows).is_err());
+        rows[8].push(0.5);
+        assert_eq!(mat9_from_rows(&rows).unwrap()[(8, 8)], 0.5);
     }
 
     fn covariance_of_iso() -> Mat9 {

@@ -1,13 +1,20 @@
-//! What the page's 3D view draws (`www/view3d.js`): a second `#[wasm_bindgen] impl
-//! Session` block with the mesh for display, each view's camera in scene-file form
-//! and a picture of each view (its photograph, or its mask) for the image planes. No
-//! maths beyond capping sizes for display.
+//! What the page's 3D view draws (`www/view3d.js`, which only draws): a second
+//! `#[wasm_bindgen] impl Session` block with the mesh for display, each view's camera
+//! in scene-file form, a picture of each view (its photograph, or its mask) for the
+//! image planes, the cameras' frames and where the viewer looks from
+//! (`cameraFrames`, `crate::app::scene_view`), and the ghosts of a finished fit
+//! (`ghosts`, poses drawn from its covariance, `uncertainty::ghost_poses`); and
+//! `framesOfCameras`, the frames of any cameras (the suggested next views). No maths
+//! here beyond capping sizes for display.
 
 use super::{to_js, Session};
-use crate::camera::Camera;
+use crate::app::scene_view::{bounding_radius, frustum, CameraFrame, SceneFrames};
+use crate::camera::{Camera, CameraJson};
 use crate::mesh::Mesh;
 use crate::pose::mat4_to_rows;
+use crate::uncertainty::ghost_poses;
 use crate::view::View;
+use glam::DVec3;
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
@@ -35,6 +42,31 @@ export interface SceneCamera {
 /** A view's picture for the 3D view: RGBA8, row 0 at the top, at most `maxSide` pixels a side. */
 export interface ViewPicture {
   width: number; height: number; kind: "image" | "mask"; rgba: Uint8ClampedArray;
+}
+/** A camera's frame in the world (OpenCV axes: x right, y down, z forward), for drawing its frustum. */
+export interface CameraFrame {
+  /** Its centre and its x, y, z axes (unit), world coordinates. */
+  centre: number[]; x: number[]; y: number[]; z: number[];
+  /** Camera to world, 4×4 rows; the same for a viewer with OpenGL's axes (y and z negated), to look through it. */
+  camera_to_world: number[][]; viewer_to_world: number[][];
+  /** The image plane at the scene's depth, camera frame: its corners at the pixel edges (top-left, top-right, bottom-right, bottom-left), and the triangle over its top edge (left foot, tip, right foot). */
+  corners: number[][]; marker: number[][];
+  /** For a view's camera: where a viewer looking through it orbits (on its axis, at the target's distance). */
+  look_at?: number[];
+}
+/** The 3D view's scene: the views' camera frames, where they look and the viewer's start. */
+export interface SceneFrames {
+  frames: CameraFrame[];
+  /** The point nearest every camera's optical axis (least squares), or null when they are (nearly) parallel or fewer than two. */
+  meet: number[] | null;
+  /** Where the cameras look: `meet`, else in front of their centroid. */
+  target: number[];
+  /** The orbit's up: minus the cameras' mean y axis (unit). */
+  up: number[];
+  /** The image planes' depth (30 % of the cameras' median distance to the target), scene units. */
+  depth: number;
+  /** The viewer's start: position (looking at `target`), clipping planes and vertical field of view (degrees). */
+  home: { position: number[]; near: number; far: number; fov_deg: number };
 }
 "#;
 
@@ -64,6 +96,84 @@ impl<'a> SceneCamera<'a> {
             world_to_camera: mat4_to_rows(c.world_to_camera_matrix()),
         }
     }
+}
+
+/// A camera's frame as the 3D view takes it.
+#[derive(Serialize)]
+struct FrameOut {
+    centre: [f64; 3],
+    x: [f64; 3],
+    y: [f64; 3],
+    z: [f64; 3],
+    camera_to_world: [[f64; 4]; 4],
+    viewer_to_world: [[f64; 4]; 4],
+    corners: [[f64; 3]; 4],
+    marker: [[f64; 3]; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    look_at: Option<[f64; 3]>,
+}
+
+impl FrameOut {
+    fn new(camera: &Camera, frame: &CameraFrame, depth: f64, look_at: Option<DVec3>) -> FrameOut {
+        let (corners, marker) = frustum(camera, depth);
+        let [x, y, z] = frame.axes.map(|v| v.to_array());
+        FrameOut {
+            centre: frame.centre.to_array(),
+            x,
+            y,
+            z,
+            camera_to_world: mat4_to_rows(frame.camera_to_world),
+            viewer_to_world: mat4_to_rows(frame.viewer_to_world()),
+            corners: corners.map(|v| v.to_array()),
+            marker: marker.map(|v| v.to_array()),
+            look_at: look_at.map(|v| v.to_array()),
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct ViewerOut {
+    position: [f64; 3],
+    near: f64,
+    far: f64,
+    fov_deg: f64,
+}
+
+#[derive(Serialize)]
+struct SceneFramesOut {
+    frames: Vec<FrameOut>,
+    meet: Option<[f64; 3]>,
+    target: [f64; 3],
+    up: [f64; 3],
+    depth: f64,
+    home: ViewerOut,
+}
+
+/// The frames of `cameras` (scene-file form: a `CameraJson` each, other keys such as
+/// `name` ignored) with their image planes at `depth` scene units — for drawing
+/// cameras that are not the session's views, such as `Session.suggestViews`'s. Throws
+/// an `Error` naming the camera that is not valid, or for a depth that is not positive.
+#[wasm_bindgen(js_name = framesOfCameras, unchecked_return_type = "CameraFrame[]")]
+pub fn frames_of_cameras(
+    #[wasm_bindgen(unchecked_param_type = "CameraJson[]")] cameras: JsValue,
+    depth: f64,
+) -> Result<JsValue, JsError> {
+    if !(depth.is_finite() && depth > 0.0) {
+        return Err(JsError::new(&format!(
+            "framesOfCameras: depth {depth} is not a positive number"
+        )));
+    }
+    let list: Vec<CameraJson> = serde_wasm_bindgen::from_value(cameras)
+        .map_err(|e| JsError::new(&format!("framesOfCameras: not a list of cameras: {e}")))?;
+    let out = list
+        .iter()
+        .enumerate()
+        .map(|(i, json)| {
+            let camera = json.to_camera(&format!("camera {i}"))?;
+            Ok(FrameOut::new(&camera, &CameraFrame::new(&camera), depth, None))
+        })
+        .collect::<crate::error::Result<Vec<_>>>()?;
+    to_js(&out)
 }
 
 /// The mesh for display: itself up to `max` triangles, otherwise a vertex-clustered
@@ -180,6 +290,51 @@ impl Session {
             .map(|v| SceneCamera::new(v.name(), v.camera()))
             .collect();
         to_js(&cams)
+    }
+
+    /// The views' camera frames, where they look and where the 3D viewer starts
+    /// (`crate::app::scene_view`), for a viewer of width/height `aspect` (1 when
+    /// omitted); the image planes at 30 % of the cameras' median distance to the target.
+    #[wasm_bindgen(js_name = cameraFrames, unchecked_return_type = "SceneFrames")]
+    pub fn camera_frames(&self, aspect: Option<f64>) -> Result<JsValue, JsError> {
+        let est = self.estimator();
+        let cameras: Vec<Camera> = est.views().iter().map(|v| *v.camera()).collect();
+        let s = SceneFrames::new(&cameras, bounding_radius(est.mesh()), aspect.unwrap_or(1.0));
+        let frames = cameras
+            .iter()
+            .zip(&s.frames)
+            .enumerate()
+            .map(|(i, (c, f))| FrameOut::new(c, f, s.depth, Some(s.look_target(i))))
+            .collect();
+        to_js(&SceneFramesOut {
+            frames,
+            meet: s.meet.map(|v| v.to_array()),
+            target: s.target.to_array(),
+            up: s.up.to_array(),
+            depth: s.depth,
+            home: ViewerOut {
+                position: s.home.position.to_array(),
+                near: s.home.near,
+                far: s.home.far,
+                fov_deg: s.home.fov_deg,
+            },
+        })
+    }
+
+    /// `count` ghosts of the finished fit: poses drawn from its covariance about its
+    /// pose with a generator seeded by `seed` (the same ghosts for the same seed;
+    /// `uncertainty::ghost_poses`), each as its object-to-world 4×4 `[R·diag(s) | t]`,
+    /// 16 numbers row-major. Empty before the fit is done and when its uncertainty could
+    /// not be measured. Throws an `Error` for a covariance that is not finite.
+    #[wasm_bindgen(unchecked_return_type = "number[][]")]
+    pub fn ghosts(&self, count: u32, seed: u32) -> Result<JsValue, JsError> {
+        let est = self.estimator();
+        let Some(Ok(u)) = est.uncertainty() else {
+            return to_js(&Vec::<[f64; 16]>::new());
+        };
+        let ghosts = ghost_poses(&est.pose(), &u.covariance, count as usize, seed as u64)?;
+        let out: Vec<[f64; 16]> = ghosts.iter().map(|g| g.matrix().transpose().to_cols_array()).collect();
+        to_js(&out)
     }
 
     /// View `view`'s picture for the 3D view's image plane: its photograph, or its mask

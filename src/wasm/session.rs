@@ -39,6 +39,8 @@ struct ProgressOut<'a> {
     #[serde(flatten)]
     core: &'a Progress,
     pose: PoseOut,
+    /// The pose's object-to-world 4×4, rows.
+    matrix: [[f64; 4]; 4],
     stages: usize,
     done: bool,
     seconds: f64,
@@ -131,6 +133,7 @@ impl Session {
         to_js(&ProgressOut {
             core: p,
             pose: PoseOut::from_pose(&p.pose),
+            matrix: crate::pose::mat4_to_rows(p.pose.matrix()),
             stages: self.est.settings().stages.len(),
             done: self.est.is_done(),
             seconds: self.seconds,

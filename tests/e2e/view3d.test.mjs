@@ -8,6 +8,8 @@
 //
 // The canvas is read back (preserveDrawingBuffer) and its pixels counted; the view's
 // state is read through its API (document.getElementById('view3d').view3d.info()).
+// What the view draws is computed in Rust (frames, ghosts, matrices): these tests check
+// that the page draws it where it says.
 import { chromium } from 'playwright-core';
 import { spawn } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync } from 'node:fs';
@@ -198,6 +200,12 @@ test('scene: after loading, the 3D canvas is drawn; one frustum with its picture
   await page.screenshot({ path: join(artifacts, "view3d-loaded.png"), clip: await byId(page, "view3d").boundingBox() });
   assert.ok(px.ink > 0.01 * px.pixels, `the 3D canvas is (nearly) blank: ${px.ink} of ${px.pixels} pixels drawn`);
   assert.equal(px.orange, 0, 'no suggestion yet');
+  // Where the viewer starts and looks: Rust's (Session.cameraFrames), the views' axes meeting.
+  const frames = await call(page, (v) => v.sceneFrames);
+  assert.equal(frames.frames.length, toyScene.views.length);
+  assert.ok(Array.isArray(frames.meet), 'the toy views\' axes meet');
+  assert.deepEqual(s.viewer.target, frames.target);
+  assert.ok(maxDiff(s.viewer.position, frames.home.position) < 1e-9, `${s.viewer.position} vs ${frames.home.position}`);
   const names = await byId(page, 'view3d-look').locator('option').allTextContents();
   assert.deepEqual(names, ['free orbit', ...toyScene.views.map((v) => v.name)]);
   await page.screenshot({ path: join(artifacts, 'view3d-loaded.png'), clip: await byId(page, 'view3d').boundingBox() });
@@ -304,51 +312,56 @@ test('look through a view: the object drawn at the fitted pose covers that view\
   console.log(`  IoU drawn object vs mask, per view: ${ious.map((x) => x.toFixed(3)).join(' ')}`);
 });
 
-test('uncertainty: ghosts drawn from a covariance (the result\'s, or one given), a singular one too, none for null', async () => {
+// The ghosts are poses drawn in Rust (Session.ghosts) from the finished fit's
+// covariance; the singular and indefinite covariances are the Rust unit tests' cases
+// (src/uncertainty/mod.rs). Here: the page draws the worker's ghosts where Rust put
+// them, they stay put, and any matrices given are drawn as given.
+test('uncertainty: the finished fit\'s ghosts from Rust, spread as its standard deviations, seeded; given matrices drawn as given', async () => {
   const { page, result } = await fittedPage();
-  const s0 = await info(page);
-  assert.equal(s0.ghosts, Array.isArray(result.covariance) ? 12 : 0, `result.covariance is ${result.covariance ? 'given' : 'absent'}`);
-  await call(page, (v) => v.setUncertainty(null));
+  assert.ok(Array.isArray(result.covariance), `the toy's fit measures its uncertainty: ${result.uncertainty_error}`);
   await rendered(page);
+  const s0 = await info(page);
+  assert.equal(s0.ghosts, 12, 'Session.ghosts(12, 1), posted by the worker');
+  const M = s0.objectMatrix;
+  const col = (m, j) => [m[j], m[4 + j], m[8 + j]];
+  // About the result's pose, within 6σ of its translation and scale; not all on it.
+  const sdT = Math.hypot(...result.std_dev.translation);
+  const shifts = s0.ghostMatrices.map((g) => Math.hypot(g[3] - M[3], g[7] - M[7], g[11] - M[11]));
+  assert.ok(Math.max(...shifts) < 6 * sdT, `a ghost moved ${Math.max(...shifts)} (σ ${sdT})`);
+  assert.ok(shifts.some((d) => d > 0), 'the ghosts spread');
+  const sdS = Math.max(...result.std_dev.scale_pct) / 100;
+  const logScale = s0.ghostMatrices.flatMap((g) => [0, 1, 2].map((j) => Math.log(Math.hypot(...col(g, j)) / Math.hypot(...col(M, j)))));
+  assert.ok(Math.max(...logScale.map(Math.abs)) < 6 * sdS + 1e-9, `log scales ${logScale} (σ ${sdS})`);
+  assert.ok(s0.ghostMatrices.every((g) => g.length === 16 && g.every(Number.isFinite)));
+  // Seeded: the same ghosts frame after frame.
+  await rendered(page);
+  await rendered(page);
+  assert.deepEqual((await info(page)).ghostMatrices, s0.ghostMatrices, 'the ghosts stay put between frames');
+
+  // Drawing: none, then given matrices (the object's, moved sideways) exactly as given.
+  await call(page, (v) => v.setGhosts(null));
+  await rendered(page);
+  assert.equal((await info(page)).ghosts, 0);
   const clean = await glPixels(page);
-  // σ: 0.05 rad, 0.01 scene units, 2 % in scale.
-  const sd = [0.05, 0.05, 0.05, 0.01, 0.01, 0.01, 0.02, 0.02, 0.02];
-  const cov = sd.map((a, i) => sd.map((b, j) => (i === j ? a * b : 0)));
-  await call(page, (v, cov) => v.setUncertainty(cov), cov);
+  const step = 0.1 * Math.hypot(...col(M, 0));
+  const moved = [[step, 0, 0], [-step, 0, 0], [0, step, 0], [0, -step, 0]]
+    .map((d) => M.map((x, k) => (k === 3 ? x + d[0] : k === 7 ? x + d[1] : k === 11 ? x + d[2] : x)));
+  await call(page, (v, m) => v.setGhosts(m), moved);
   await rendered(page);
   const s = await info(page);
-  assert.equal(s.ghosts, 12);
+  assert.equal(s.ghosts, 4);
+  assert.ok(maxDiff(s.ghostMatrices, moved) < 1e-12, 'drawn at the matrices given');
   const withGhosts = await glPixels(page);
   assert.notEqual(withGhosts.sum, clean.sum, 'the ghosts change the picture');
   assert.ok(withGhosts.ink >= clean.ink, 'ghosts only add');
-  const M = s.objectMatrix;
-  const col = (m, j) => [m[j], m[4 + j], m[8 + j]];
-  const shifts = s.ghostMatrices.map((g) => Math.hypot(g[3] - M[3], g[7] - M[7], g[11] - M[11]));
-  assert.ok(Math.max(...shifts) < 6 * 0.01 * Math.sqrt(3), `a ghost moved ${Math.max(...shifts)}`);
-  assert.ok(shifts.reduce((a, b) => a + b) / shifts.length > 0.003, 'the ghosts spread');
-  const logScale = s.ghostMatrices.flatMap((g) => [0, 1, 2].map((j) => Math.log(Math.hypot(...col(g, j)) / Math.hypot(...col(M, j)))));
-  assert.ok(Math.max(...logScale.map(Math.abs)) < 6 * 0.02 && logScale.some((x) => Math.abs(x) > 1e-3), `scales ${logScale}`);
-
-  // Singular (only t_x uncertain): a tiny ridge, and the ghosts move along x only.
-  const singular = cov.map((r, i) => r.map((_, j) => (i === 3 && j === 3 ? 1e-4 : 0)));
-  await call(page, (v, c) => v.setUncertainty(c), singular);
+  // 4×4 rows are taken too; an entry that is not 16 finite numbers is left out.
+  const rows = [0, 1, 2, 3].map((i) => moved[0].slice(4 * i, 4 * i + 4));
+  await call(page, (v, m) => v.setGhosts(m), [rows, [1, NaN], moved[1].map((x, k) => (k === 5 ? NaN : x))]);
   const g = await info(page);
-  assert.equal(g.ghosts, 12);
-  for (const m of g.ghostMatrices) {
-    for (const k of [0, 1, 2, 4, 5, 6, 7, 8, 9, 10, 11]) assert.ok(Math.abs(m[k] - M[k]) < 1e-6, `element ${k}: ${m[k]} vs ${M[k]}`);
-  }
-  assert.ok(g.ghostMatrices.some((m) => Math.abs(m[3] - M[3]) > 1e-3), 'moved along x');
-  // Indefinite (a negative eigenvalue, as a broken estimate could give): clipped, still drawn.
-  const indefinite = cov.map((r, i) => r.map((x, j) => (i === 3 && j === 4 ? 2e-4 : i === 4 && j === 3 ? 2e-4 : x)));
-  await call(page, (v, c) => v.setUncertainty(c), indefinite);
-  const h = await info(page);
-  assert.equal(h.ghosts, 12);
-  assert.ok(h.ghostMatrices.flat().every(Number.isFinite));
-  // Not a 9×9 matrix of numbers: no ghosts.
-  await call(page, (v) => v.setUncertainty([[1, NaN], [0, 1]]));
-  assert.equal((await info(page)).ghosts, 0);
-  await call(page, (v) => v.setUncertainty(null));
-  assert.equal((await info(page)).ghosts, 0);
+  assert.equal(g.ghosts, 1);
+  assert.ok(maxDiff(g.ghostMatrices[0], moved[0]) < 1e-12);
+  await call(page, (v, m) => v.setGhosts(m), s0.ghostMatrices); // the worker's again
+  assert.equal((await info(page)).ghosts, 12);
   assert.deepEqual(page.problems, []);
 });
 
@@ -397,7 +410,16 @@ test('suggestion: the next view is a highlighted frustum with its camera JSON; R
   const before = await glPixels(page);
   const cam = oppositeCamera(toyScene, result.pose);
   const second = oppositeCamera({ views: [toyScene.views[1]] }, result.pose);
-  await call(page, (v, cams) => v.setSuggestion(cams), [cam, { camera: second, score: 0.5 }]);
+  // Their frames from Rust (framesOfCameras, as the worker makes the suggestions'), by
+  // the page's wasm package loaded here, with the scene's image-plane depth.
+  const depth = await call(page, (v) => v.sceneFrames.depth);
+  const frames = await page.evaluate(async ([cams, depth]) => {
+    const m = await import(new URL('pkg/localisebot.js', location.href).href);
+    await m.default({ module_or_path: new URL('pkg/localisebot_bg.wasm', location.href) });
+    return m.framesOfCameras(cams, depth);
+  }, [[cam, second], depth]);
+  assert.equal(frames.length, 2);
+  await call(page, (v, list) => v.setSuggestion(list), [{ camera: cam, frame: frames[0] }, { camera: second, frame: frames[1], score: 0.5 }]);
   await rendered(page);
   const s = await info(page);
   assert.ok(s.suggestion, 'the best suggestion is drawn');
@@ -410,8 +432,7 @@ test('suggestion: the next view is a highlighted frustum with its camera JSON; R
   assert.deepEqual(shown, cam, 'the readout is the best camera, in scene-file form');
   await page.screenshot({ path: join(artifacts, 'view3d-suggestion.png'), clip: await byId(page, 'view3d').boundingBox() });
 
-  // Reset: the fit is no longer done, so the worker clears the uncertainty and the suggestion.
-  await call(page, (v) => v.setUncertainty([...Array(9)].map((_, i) => [...Array(9)].map((_, j) => (i === j ? 1e-4 : 0)))));
+  // Reset: the fit is no longer done, so the worker clears the ghosts and the suggestion.
   assert.equal((await info(page)).ghosts, 12);
   await byId(page, 'reset').click();
   await page.waitForFunction(() => {

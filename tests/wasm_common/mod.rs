@@ -498,6 +498,9 @@ fn a_fit_converges_to_the_native_result() {
     assert_eq!(heights(session.suggest_views(2, None).unwrap()).len(), 2);
     let msg = js_message(session.suggest_views(1, Some("below".into())).err().unwrap());
     assert!(msg.contains("below") && msg.contains("above"), "{msg}");
+
+    // The 3D view's ghosts of the finished fit.
+    scene_view::ghosts_of_a_finished_fit(&mut session, &wasm);
 }
 
 /// The pool's protocol as the page's coordinator runs it (`www/worker.js`), in one

@@ -1,12 +1,41 @@
 //! The 3D view's getters (`src/wasm/scene_view.rs`): the display mesh (capped at
-//! 200k triangles), the cameras in scene-file form, each view's picture.
+//! 200k triangles), the cameras in scene-file form, each view's picture, the cameras'
+//! frames (and those of any cameras, `framesOfCameras`) and a finished fit's ghosts.
 
-use super::{file_set, js_get, toy_example};
+use super::{file_set, js_get, js_message, toy_example};
+use glam::{DMat4, DVec3};
 use localisebot::app::shapes::toy_plane;
-use localisebot::wasm::{display_mesh, Session, MAX_DISPLAY_TRIANGLES};
-use localisebot::{CameraJson, Mesh};
-use wasm_bindgen::JsCast;
+use localisebot::wasm::{display_mesh, frames_of_cameras, Session, MAX_DISPLAY_TRIANGLES};
+use localisebot::{mat4_from_rows, CameraJson, Mesh};
+use serde_json::Value;
+use wasm_bindgen::{JsCast, JsValue};
 use wasm_bindgen_test::wasm_bindgen_test;
+
+fn json(v: JsValue) -> Value {
+    serde_wasm_bindgen::from_value(v).unwrap()
+}
+
+fn v3(v: &Value) -> DVec3 {
+    DVec3::from_array(serde_json::from_value(v.clone()).unwrap())
+}
+
+fn m4(v: &Value) -> DMat4 {
+    mat4_from_rows(serde_json::from_value(v.clone()).unwrap())
+}
+
+/// Every number in a JSON value, in order.
+fn numbers(v: &Value) -> Vec<f64> {
+    match v {
+        Value::Array(a) => a.iter().flat_map(numbers).collect(),
+        v => vec![v.as_f64().unwrap()],
+    }
+}
+
+/// A row-major 16-number matrix.
+fn m16(v: &Value) -> DMat4 {
+    let a: [f64; 16] = serde_json::from_value(v.clone()).unwrap();
+    DMat4::from_cols_array(&a).transpose()
+}
 
 /// A flat (rows × rows × 2)-triangle grid over the unit square, gently curved.
 fn grid(rows: u32) -> Mesh {
@@ -120,4 +149,128 @@ fn geometry_cameras_and_pictures_are_what_the_session_fits() {
             }
         );
     }
+}
+
+#[wasm_bindgen_test]
+fn camera_frames_are_the_views_cameras_looking_at_the_object() {
+    let ex = toy_example();
+    let mut session = Session::from_files(&file_set(&ex, false)).unwrap();
+    let s = json(session.camera_frames(Some(1.5)).unwrap());
+    let frames = s["frames"].as_array().unwrap();
+    let views = session.estimator().views();
+    assert_eq!(frames.len(), views.len());
+    let target = v3(&s["target"]);
+    assert_eq!(v3(&s["meet"]), target, "the synthetic views' axes meet");
+    let depth = s["depth"].as_f64().unwrap();
+    let mut dists: Vec<f64> = views.iter().map(|v| v.camera().centre().distance(target)).collect();
+    dists.sort_by(f64::total_cmp);
+    assert!((depth - 0.3 * dists[dists.len() / 2]).abs() < 1e-9, "{depth}");
+    // The views look at the object: its centre near the target (synth aims at it).
+    let truth = session.estimator().mesh().bounds().unwrap().centre();
+    let gt: Value = serde_json::from_slice(&ex[0].1).unwrap();
+    let pose =
+        localisebot::PoseJson::to_pose(&serde_json::from_value(gt["ground_truth_pose"].clone()).unwrap()).unwrap();
+    assert!(
+        pose.apply(truth).distance(target) < 0.1 * dists[0],
+        "{target} vs {}",
+        pose.apply(truth)
+    );
+    let up = v3(&s["up"]);
+    let mean_y: DVec3 = views.iter().map(|v| v.camera().rotation.row(1)).sum();
+    assert!(up.abs_diff_eq(-mean_y.normalize(), 1e-12), "minus the mean y axis");
+    for (f, v) in frames.iter().zip(views) {
+        let cam = v.camera();
+        assert!((m4(&f["camera_to_world"]) * cam.world_to_camera_matrix()).abs_diff_eq(DMat4::IDENTITY, 1e-12));
+        assert!(v3(&f["centre"]).abs_diff_eq(cam.centre(), 1e-12));
+        assert!(v3(&f["z"]).abs_diff_eq(cam.rotation.row(2), 1e-15));
+        // The image plane's bottom-right corner lies on the last pixel's outer edge.
+        let corner = m4(&f["camera_to_world"]).transform_point3(v3(&f["corners"][2]));
+        let uv = cam.project(cam.to_camera(corner));
+        assert!((uv.x - (cam.width as f64 - 0.5)).abs() < 1e-6 && (uv.y - (cam.height as f64 - 0.5)).abs() < 1e-6);
+        assert!((v3(&f["corners"][0]).z - depth).abs() < 1e-12);
+        // Looking through it: OpenGL axes, orbiting a point on its axis.
+        let gl = m4(&f["viewer_to_world"]);
+        assert!((-gl.z_axis.truncate()).abs_diff_eq(cam.rotation.row(2), 1e-15));
+        let look = v3(&f["look_at"]);
+        assert!((look - cam.centre()).normalize().abs_diff_eq(cam.rotation.row(2), 1e-9));
+    }
+    let home = &s["home"];
+    assert!(v3(&home["position"]).is_finite() && (v3(&home["position"]) - target).dot(up) > 0.0);
+    assert_eq!(home["fov_deg"].as_f64(), Some(45.0));
+    assert!(home["near"].as_f64().unwrap() > 0.0);
+
+    // The frames of the same cameras as JSON (the suggestions' way): the same (up to
+    // the rotation's re-projection onto SO(3) as a camera is read), without `look_at`.
+    let again = json(frames_of_cameras(session.cameras().unwrap(), depth).unwrap());
+    for (a, f) in again.as_array().unwrap().iter().zip(frames) {
+        let mut f = f.clone();
+        f.as_object_mut().unwrap().remove("look_at");
+        let (a, f) = (a.as_object().unwrap(), f.as_object().unwrap());
+        assert_eq!(a.keys().collect::<Vec<_>>(), f.keys().collect::<Vec<_>>());
+        for (key, value) in a {
+            let (x, y) = (numbers(value), numbers(&f[key]));
+            assert_eq!(x.len(), y.len(), "{key}");
+            assert!(
+                x.iter().zip(&y).all(|(p, q)| (p - q).abs() < 1e-12),
+                "{key}: {x:?} vs {y:?}"
+            );
+        }
+    }
+    // Plain JavaScript objects, as the page has them; the second camera is not valid.
+    let bad = js_sys::JSON::parse(
+        r#"[{ "name": "ok", "width": 8, "height": 8, "fx": 8, "fy": 8, "cx": 4, "cy": 4,
+              "world_to_camera": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1]] },
+            { "width": 8, "height": 8, "fx": -1, "fy": 8, "cx": 4, "cy": 4,
+              "world_to_camera": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1]] }]"#,
+    )
+    .unwrap();
+    let one = js_sys::Array::of1(&js_sys::Array::from(&bad).get(0));
+    assert_eq!(
+        json(frames_of_cameras(one.into(), 1.0).unwrap())
+            .as_array()
+            .unwrap()
+            .len(),
+        1
+    );
+    let msg = js_message(frames_of_cameras(bad, 1.0).err().unwrap());
+    assert!(msg.contains("camera 1") && msg.contains("focal"), "{msg}");
+    let msg = js_message(frames_of_cameras(js_sys::Array::new().into(), 0.0).err().unwrap());
+    assert!(msg.contains("depth"), "{msg}");
+    assert!(frames_of_cameras(JsValue::from_str("no"), 1.0).is_err());
+
+    // No ghosts before the fit is done; the progress carries the pose's matrix.
+    assert_eq!(json(session.ghosts(12, 1).unwrap()), serde_json::json!([]));
+    let progress = json(session.progress().unwrap());
+    assert!(m4(&progress["matrix"]).abs_diff_eq(session.estimator().pose().matrix(), 1e-12));
+}
+
+/// Called by the fit test (`a_fit_converges_to_the_native_result`) with its finished
+/// session and result: 12 ghosts about the result's matrix, spread as its standard
+/// deviations say, the same for the same seed.
+pub(super) fn ghosts_of_a_finished_fit(session: &mut Session, result: &Value) {
+    let ghosts = json(session.ghosts(12, 1).unwrap());
+    let ghosts = ghosts.as_array().unwrap();
+    assert_eq!(ghosts.len(), 12);
+    assert_eq!(
+        json(session.ghosts(12, 1).unwrap()).as_array().unwrap(),
+        ghosts,
+        "seeded"
+    );
+    assert_ne!(json(session.ghosts(12, 2).unwrap()).as_array().unwrap(), ghosts);
+    let m = m4(&result["matrix"]);
+    let sd = v3(&result["std_dev"]["translation"]);
+    let shifts: Vec<f64> = ghosts
+        .iter()
+        .map(|g| {
+            let g = m16(g);
+            assert!(g.is_finite());
+            assert_eq!(g.row(3), glam::DVec4::W, "an affine matrix");
+            (g.w_axis - m.w_axis).truncate().length()
+        })
+        .collect();
+    assert!(shifts.iter().all(|&d| d < 6.0 * sd.length()), "{shifts:?} vs σ {sd}");
+    assert!(shifts.iter().any(|&d| d > 0.0), "the ghosts spread");
+    // Progress and result agree on the pose's matrix.
+    let p = json(session.step(1).unwrap());
+    assert!(m4(&p["matrix"]).abs_diff_eq(m, 1e-12));
 }
