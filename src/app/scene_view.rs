@@ -7,7 +7,7 @@
 
 use crate::camera::Camera;
 use crate::mesh::Mesh;
-use glam::{DMat3, DMat4, DVec3, DVec4};
+use glam::{DMat4, DVec3, DVec4};
 
 /// The image planes' depth as a fraction of the cameras' median distance to the target.
 pub const DEPTH_FRACTION: f64 = 0.3;
@@ -79,22 +79,8 @@ pub fn frustum(camera: &Camera, depth: f64) -> ([DVec3; 4], [DVec3; 3]) {
 /// The point nearest every frame's optical axis (least squares: `Σ (I − d dᵀ)(x − c) =
 /// 0`), or `None` for fewer than two frames or axes (nearly) parallel.
 pub fn axes_meet(frames: &[CameraFrame]) -> Option<DVec3> {
-    if frames.len() < 2 {
-        return None;
-    }
-    let (mut a, mut b) = (DMat3::ZERO, DVec3::ZERO);
-    for f in frames {
-        let d = f.forward().normalize();
-        let p = DMat3::IDENTITY - DMat3::from_cols(d * d.x, d * d.y, d * d.z);
-        a += p;
-        b += p * f.centre;
-    }
-    let n = frames.len() as f64;
-    let det = a.determinant();
-    if det.is_nan() || det.abs() <= 1e-6 * n * n * n {
-        return None;
-    }
-    Some(a.inverse() * b)
+    let rays: Vec<_> = frames.iter().map(|f| (f.centre, f.forward().normalize())).collect();
+    crate::optim::init::nearest_point(&rays)
 }
 
 /// The orbit's up: minus the frames' mean y axis (unit), or world z when that vanishes.
