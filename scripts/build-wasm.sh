@@ -38,7 +38,7 @@ fi
 # reference-types, sign-ext, and simd128 from .cargo/config.toml), enabled explicitly
 # over the MVP so that wasm-opt refuses anything else. -O3 rather than -Oz: -Oz saves
 # another 4 % raw but only 0.2 % gzipped; the fit times of the unoptimised, -O3 and -Oz
-# builds were within this VM's noise (BENCHMARKS.md, "Browser"). wasm-opt drops the name
+# builds were within this VM's noise (docs/benchmark-history.md, "Browser"). wasm-opt drops the name
 # section (function names, 189 KB) unless given -g.
 FEATURES=(--mvp-features --enable-bulk-memory --enable-bulk-memory-opt --enable-call-indirect-overlong
   --enable-multivalue --enable-mutable-globals --enable-nontrapping-float-to-int --enable-reference-types

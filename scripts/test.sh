@@ -49,11 +49,11 @@ wasm_tests() { # wasm_tests (browser|node) TEST_TARGET... — built as the shipp
 }
 
 step "cargo fmt --check" cargo fmt --all -- --check
-step "cargo clippy" cargo clippy --all-targets --locked -- -D warnings
+step "cargo clippy" cargo clippy --workspace --all-targets --locked -- -D warnings
 step "cargo doc (the crate's manual: no broken links, every public item documented)" \
   env RUSTDOCFLAGS="-D warnings" cargo doc --locked --no-deps
 step "cargo clippy (the second tier of tests)" cargo clippy --test tier2 --locked -- -D warnings
-step "native tests (fast tier: cargo test)" cargo test --locked --no-fail-fast
+step "native tests (fast tier: cargo test)" cargo test --workspace --locked --no-fail-fast
 step "native tests, second tier (statistical checks, real photographs)" cargo test --locked --no-fail-fast --test tier2
 step "wasm32 build of the library" cargo build --locked --lib --release --no-default-features --target wasm32-unknown-unknown
 step "wasm tests in headless Chromium" wasm_tests browser wasm

@@ -10,11 +10,13 @@
 //! normalised by SAM's mean and standard deviation ([`Sam::embed`]). A prompt is a box
 //! (SAM's labels 2 and 3 for its corners), points on (1) and off (0) the object, and
 //! optionally a previous mask's low-resolution logits as mask input, all in the crop's
-//! pixel-edge coordinates (pixel i spans [i, i + 1]); [`Sam::decode`] returns the
-//! 256² logits, the mask at the crop's size (logits > 0 after SAM's bilinear
-//! upscaling) and the model's own IoU estimate. The decoder's `orig_im_size` input and
-//! its resize nodes are cut away (outputs `iou_predictions` and `low_res_masks`), so
-//! one optimised decoder serves every crop size and the upscaling is done here.
+//! pixel-edge coordinates (pixel i spans [i, i + 1]); [`Sam::decode`] returns all four
+//! of the decoder's masks — each with its 256² logits, the mask at the crop's size
+//! (logits > 0 after SAM's bilinear upscaling) and the model's own IoU estimate — and
+//! the one SAM would pick, so that the caller can choose by what it knows (the fitted
+//! silhouette). The decoder is cut before its selection and resize nodes (and its
+//! `orig_im_size` input), so one optimised decoder serves every crop size and the
+//! choice and the upscaling are done here.
 
 #![warn(missing_docs)]
 
@@ -120,15 +122,27 @@ pub struct Prompt {
     pub mask_input: Option<Vec<f32>>,
 }
 
-/// A decoded mask.
+/// One of the decoder's masks.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Decoded {
+pub struct Candidate {
     /// 256² logits (the next prompt's mask input).
     pub low_res: Vec<f32>,
     /// The mask at the crop's size, row-major, 1 = object.
     pub mask: Vec<u8>,
     /// The model's estimate of the mask's IoU.
     pub score: f32,
+}
+
+/// The decoder's masks for a prompt: its single-mask output and its three
+/// multimask outputs (whole, part, subpart), and the one SAM itself would return.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decoded {
+    /// The four masks, SAM's order.
+    pub candidates: Vec<Candidate>,
+    /// SAM's choice (its ONNX export's rule): the single-mask output when the prompt
+    /// has more than two points (a box's corners count as two), else the multimask
+    /// output of the highest estimated IoU.
+    pub preferred: usize,
 }
 
 impl Sam {
@@ -156,7 +170,7 @@ impl Sam {
         let mut decoder = tract_onnx::onnx()
             .model_for_read(&mut &*decoder)
             .map_err(engine)?
-            .with_outputs_by_name(["iou_predictions", "low_res_masks"])
+            .with_outputs_by_name([IOU_NODE, MASKS_NODE])
             .map_err(engine)?;
         let inputs: Vec<String> = decoder
             .input_outlets()
@@ -265,20 +279,42 @@ impl Sam {
                 .copied()
                 .collect())
         };
-        let score = values(&out[0])?.first().copied().unwrap_or(0.0);
-        let low_res = values(&out[1])?;
-        if low_res.len() != LOW_RES * LOW_RES {
-            return Err(SegmentError::Engine(format!("{} low-resolution logits", low_res.len())));
+        let scores = values(&out[0])?;
+        let logits = values(&out[1])?;
+        const K: usize = 4;
+        if scores.len() != K || logits.len() != K * LOW_RES * LOW_RES {
+            return Err(SegmentError::Engine(format!(
+                "{} scores and {} logits (expected {K} and {K}×{LOW_RES}²)",
+                scores.len(),
+                logits.len()
+            )));
         }
         let side = embedding.side as usize;
-        let up = upscale(&low_res, side);
-        Ok(Decoded {
-            mask: up.iter().map(|&v| u8::from(v > 0.0)).collect(),
-            low_res,
-            score,
-        })
+        let candidates: Vec<Candidate> = logits
+            .chunks_exact(LOW_RES * LOW_RES)
+            .zip(&scores)
+            .map(|(low, &score)| Candidate {
+                mask: upscale(low, side).iter().map(|&v| u8::from(v > 0.0)).collect(),
+                low_res: low.to_vec(),
+                score,
+            })
+            .collect();
+        // SAM's ONNX export: scores + (points − 2.5)·[1000, 0, 0, 0], the largest.
+        let bonus = (n as f32 - 2.5) * 1000.0;
+        let adjusted = |i: usize| scores[i] + if i == 0 { bonus } else { 0.0 };
+        let preferred = (0..K)
+            .max_by(|&a, &b| adjusted(a).total_cmp(&adjusted(b)))
+            .expect("four candidates");
+        Ok(Decoded { candidates, preferred })
     }
 }
+
+/// The decoder's node of the four masks' estimated IoUs (1×4), before SAM's export
+/// selects one.
+const IOU_NODE: &str = "/iou_prediction_head/layers.2/Gemm";
+/// The decoder's node of the four masks' 256² logits (1×4×256×256), before the
+/// selection.
+const MASKS_NODE: &str = "/Reshape_9";
 
 /// Bilinear resampling with PyTorch's `align_corners=False` rule, `src` `sw × sh` to
 /// `dw × dh`.

@@ -3,14 +3,13 @@
 //! Every option not given takes [`FitSettings::default`]'s value.
 
 use super::files::{load_pose, load_scene_file, to_json, write, CliResult};
-use super::segmenter::{models_dir, NativeSegmenter};
+use super::segmenter::fit_photographs;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use localisebot::app::overlay;
 use localisebot::io::png::{encode_gray, encode_rgba};
 use localisebot::optim::schedule::Optimiser;
 use localisebot::optim::search::Sampling;
-use localisebot::segment::{self, PhotoFit, PhotoSettings};
 use localisebot::Verdict;
 use localisebot::{Estimator, FitSettings, Phase, ScaleMode};
 use std::path::PathBuf;
@@ -251,23 +250,7 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
     let start = Instant::now();
     if !scene.photos.is_empty() {
         // Photographs in: the masks are made, and corrected by the fit, round by round.
-        let mut segmenter = NativeSegmenter::load(&models_dir(a.models.as_deref()))?;
-        let mut photo = PhotoFit::new(scene, settings, PhotoSettings::default()).map_err(fail)?;
-        let mut last = Instant::now();
-        segment::run(&mut photo, &mut segmenter, |p| {
-            let now = Instant::now();
-            let dt = (now - last).as_secs_f64();
-            last = now;
-            match p.estimator() {
-                Some(e) if e.is_done() => eprintln!(
-                    "  round {}: fit {} in {dt:.2} s",
-                    p.rounds(),
-                    e.judgement().map_or("?", |j| j.verdict.as_str())
-                ),
-                _ => eprintln!("  round {}: masks made in {dt:.2} s", p.rounds()),
-            }
-        })
-        .map_err(fail)?;
+        let (photo, encoded) = fit_photographs(&a.scene, scene, settings, a.models.as_deref())?;
         for w in photo.warnings() {
             eprintln!("warning: {w}");
         }
@@ -280,7 +263,7 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
             "  {} mask(s) made from photographs in {} round(s), {} image encoding(s)",
             result.masks.len(),
             photo.rounds(),
-            segmenter.encoded
+            encoded
         );
         if let Some(dir) = &a.masks_out {
             for (name, mask) in photo.masks() {
@@ -341,7 +324,7 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
 }
 
 /// A mask as an 8-bit grey PNG (object 255).
-fn encode_mask(m: &localisebot::Mask) -> Vec<u8> {
+pub fn encode_mask(m: &localisebot::Mask) -> Vec<u8> {
     let grey: Vec<u8> = m.data.iter().map(|&o| o * 255).collect();
     encode_gray(m.width, m.height, &grey)
 }

@@ -9,6 +9,7 @@ mod import;
 mod info;
 mod loss;
 mod render;
+mod segment;
 mod segmenter;
 mod suggest;
 mod synth;
@@ -48,6 +49,9 @@ enum Command {
     /// Import a dataset folder (NeRF, BOP) as a scene folder.
     #[command(subcommand)]
     Import(import::ImportCommand),
+    /// Make the masks of a scene's photographs (views with an image and a box, or only an
+    /// image) and write a scene with masks: DIR/scene.json and DIR/masks/<view>.png.
+    Segment(segment::SegmentArgs),
     /// Draw overlays (mask outline and rendered contour over each view) for a pose.
     Render {
         /// The scene file.
@@ -73,6 +77,7 @@ pub fn main() -> i32 {
         Command::Eval(args) => eval::run(&args).map(|_| 0),
         Command::Bench(args) => bench::run(&args).map(|_| 0),
         Command::SuggestView(args) => suggest::run(&args).map(|_| 0),
+        Command::Segment(args) => segment::run(&args).map(|_| 0),
         Command::Render { scene, pose, out } => render::run(&scene, &pose, &out).map(|_| 0),
     };
     match result {

@@ -31,7 +31,7 @@
 //!
 //! **When to apply.** 6N − 6 more parameters always lower the loss a little, by
 //! fitting the masks' noise; corrections of exact cameras cost accuracy that way
-//! (BENCHMARKS.md "Camera correction"). So the corrections are applied only when they
+//! (docs/benchmark-history.md "Camera correction"). So the corrections are applied only when they
 //! remove at least [`CameraPrior::min_reduction`] (default 15 %) of the penalised loss
 //! at the object-only optimum. Measured on the Duck scenes of the test (3–4 views,
 //! clean masks): exact cameras 2–6 %, cameras off by 0.7° and 1 % of their distance

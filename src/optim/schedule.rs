@@ -40,7 +40,7 @@ impl StageSettings {
     /// uniform scale 0.990 at σ = 0.5 px², about 0.995 at σ = 0.1 and 0.998–1.0 at
     /// σ = 0.02). This is the silhouette-edge rasteriser's schedule: its last two
     /// stages' σ (0.01, 0.0005) were chosen over (0.05, 0.02) by accuracy runs on
-    /// synthetic scenes and the eight LM-O objects (BENCHMARKS.md "The last stages'
+    /// synthetic scenes and the eight LM-O objects (docs/benchmark-history.md "The last stages'
     /// σ"); SoftRas keeps its own ([`StageSettings::softras_schedule`]).
     pub fn default_schedule() -> Vec<StageSettings> {
         Self::schedule(0.01, 0.0005)

@@ -31,7 +31,7 @@
 //! last ones — whose fits are precise to a tenth of a pixel — render the mesh itself
 //! or nearly. (`t·√σ`, the blur's length, was measured too: as accurate on fits from
 //! no pose, but refits from a good pose lost precision, and the next-best-view check
-//! fell from 76 % to 67 %; BENCHMARKS.md.) The coarsest level whose error moves the
+//! fell from 76 % to 67 %; docs/benchmark-history.md.) The coarsest level whose error moves the
 //! silhouette by at most the tolerance is used; none (the mesh itself) when the
 //! sphere and the box both reach behind the camera or the tolerance is 0. The choice
 //! is piecewise constant in the pose: within one level the render and its gradient

@@ -6,12 +6,16 @@
 //! [`photo`] runs the rounds of segmenting and fitting ([`PhotoFit`]) in which the
 //! geometry corrects the segmenter. The segmenter itself — a neural network run by an
 //! inference engine — is outside the core: anything that answers jobs
-//! ([`Segmenter`]), natively the `localisebot-segment` crate, in the browser its own
+//! ([`Segmenter`]): natively [`SamSegmenter`] (the `localisebot-segment` crate), in the browser its own
 //! wasm module in the page's Workers.
 
 pub mod hints;
 pub mod photo;
 pub mod prompt;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod sam;
 
 pub use photo::{run, PhotoFit, PhotoSettings, Segmenter};
-pub use prompt::{Crop, PromptPoint, SegmentJob, SegmentOutput};
+pub use prompt::{Crop, MaskCandidate, PromptPoint, SegmentJob, SegmentOutput};
+#[cfg(not(target_arch = "wasm32"))]
+pub use sam::SamSegmenter;

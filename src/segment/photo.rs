@@ -18,7 +18,7 @@
 //! browser's Workers alike. [`run`] drives it with a [`Segmenter`].
 
 use super::hints::{box_of_sphere, sphere_from_boxes};
-use super::prompt::{self, Crop, SegmentJob, SegmentOutput};
+use super::prompt::{self, Crop, MaskCandidate, SegmentJob, SegmentOutput};
 use crate::error::{Error, Result};
 use crate::estimator::{Estimator, FitResult, FitSettings, MaskReport};
 use crate::io::scene::Scene;
@@ -75,6 +75,9 @@ struct Made {
     crop: Crop,
     /// The latest mask (full image) and its logits, once made.
     mask: Option<(Mask, Vec<f32>)>,
+    /// The fitted pose's silhouette the pending job was prompted from (the segmenter's
+    /// masks are chosen by it).
+    reference: Option<Mask>,
     report: MaskReport,
 }
 
@@ -137,12 +140,14 @@ impl PhotoFit {
                 slots.push(Slot::Made(Made {
                     crop: Crop { x0: 0, y0: 0, side: 0 },
                     mask: None,
+                    reference: None,
                     report: MaskReport {
                         view: p.name.clone(),
                         first_box_from: if p.hint.is_some() { "box" } else { "geometry" }.into(),
                         first_box,
                         areas: Vec::new(),
                         changes: Vec::new(),
+                        picks: Vec::new(),
                         score: 0.0,
                         iou_with_fit: 0.0,
                     },
@@ -244,26 +249,42 @@ impl PhotoFit {
                 )));
             };
             let side = job.crop.side;
-            if (out.mask.width, out.mask.height) != (side, side) || out.mask.data.len() != (side * side) as usize {
+            let sized = |c: &MaskCandidate| {
+                (c.mask.width, c.mask.height) == (side, side) && c.mask.data.len() == (side * side) as usize
+            };
+            if out.candidates.is_empty() || out.preferred >= out.candidates.len() || !out.candidates.iter().all(sized) {
                 return Err(Error::View {
                     view: m.photo.name.clone(),
                     problem: format!(
-                        "the segmenter returned a {}×{} mask for a {side}×{side} crop",
-                        out.mask.width, out.mask.height
+                        "the segmenter's answer is not {side}×{side} masks with a preferred one among them"
                     ),
                 });
             }
             let (w, h) = (m.photo.camera.width, m.photo.camera.height);
-            let mask = job.crop.to_image(&out.mask, w, h);
+            let mut masks: Vec<(Mask, MaskCandidate)> = out
+                .candidates
+                .into_iter()
+                .map(|c| (job.crop.to_image(&c.mask, w, h), c))
+                .collect();
+            // The segmenter's choice, or — once there is a fit — the reading that
+            // agrees best with the fitted silhouette.
+            let pick = match m.reference.take() {
+                Some(r) => (0..masks.len())
+                    .max_by(|&a, &b| metrics::hard_iou(&masks[a].0, &r).total_cmp(&metrics::hard_iou(&masks[b].0, &r)))
+                    .expect("candidates checked non-empty"),
+                None => out.preferred,
+            };
+            m.report.picks.push(pick);
+            let (mask, chosen) = masks.swap_remove(pick);
             if let Some((prev, _)) = &m.mask {
                 let change = metrics::hard_iou(prev, &mask);
                 all_converged &= change >= self.photo.converged_iou;
                 m.report.changes.push(change);
             }
             m.report.areas.push(mask.area());
-            m.report.score = out.score;
+            m.report.score = chosen.score;
             m.crop = job.crop;
-            m.mask = Some((mask, out.logits));
+            m.mask = Some((mask, chosen.logits));
         }
         self.round += 1;
         self.converged = all_converged;
@@ -385,6 +406,7 @@ impl PhotoFit {
                 m.crop = Crop::around(&b, margin);
                 SegmentJob::from_box(i, m.crop, &b)
             });
+            m.reference = tight.is_some().then_some(silhouette);
             jobs.push((doubted.contains(&m.photo.name), job));
         }
         // The views the fit doubts first.

@@ -126,15 +126,36 @@ pub struct SegmentJob {
     pub previous: Option<Vec<f32>>,
 }
 
-/// The segmenter's answer to a [`SegmentJob`].
+/// One mask the segmenter offers for a [`SegmentJob`].
 #[derive(Debug, Clone, PartialEq)]
-pub struct SegmentOutput {
+pub struct MaskCandidate {
     /// The crop's mask, `side × side`.
     pub mask: Mask,
     /// Its logits on the segmenter's low-resolution grid (to pass back as `previous`).
     pub logits: Vec<f32>,
     /// The segmenter's own estimate of the mask's IoU.
     pub score: f32,
+}
+
+/// The segmenter's answer to a [`SegmentJob`]: its masks (a prompted segmenter offers
+/// several readings — the whole object, a part) and the one it prefers. The fit
+/// chooses among them once it has a silhouette to compare with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SegmentOutput {
+    /// At least one.
+    pub candidates: Vec<MaskCandidate>,
+    /// The segmenter's own choice (an index into `candidates`).
+    pub preferred: usize,
+}
+
+impl SegmentOutput {
+    /// An answer of one mask.
+    pub fn single(mask: Mask, logits: Vec<f32>, score: f32) -> SegmentOutput {
+        SegmentOutput {
+            candidates: vec![MaskCandidate { mask, logits, score }],
+            preferred: 0,
+        }
+    }
 }
 
 impl SegmentJob {

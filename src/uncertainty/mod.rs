@@ -34,8 +34,8 @@
 //! minimises IoU + contour, not this least-squares form; the residual's shrinkage at
 //! the optimum; correlation at the scale of the object — and is *calibrated*: chosen
 //! on one set of synthetic scenes with known truth so that the truth falls inside the
-//! 95 % ellipsoid in about 95 % of them, then checked on other scenes (BENCHMARKS.md
-//! "Uncertainty"; `tests/integration/uncertainty.rs` prints the coverage). The floor
+//! 95 % ellipsoid in about 95 % of them, then checked on other scenes (docs/benchmark-history.md
+//! "Uncertainty"; `tests/tier2/uncertainty.rs` prints the coverage). The floor
 //! is the pixel quantisation of an ideal mask (`1/12 px²` over a correlation of 1 px),
 //! so a perfect fit to a perfect mask still reports the grid's uncertainty.
 //!
@@ -84,7 +84,7 @@ pub struct NoiseModel {
 }
 
 impl Default for NoiseModel {
-    /// A bandwidth of 24 px, κ = 2.2 (calibrated: BENCHMARKS.md "Uncertainty"), the
+    /// A bandwidth of 24 px, κ = 2.2 (calibrated: docs/benchmark-history.md "Uncertainty"), the
     /// quantisation floor 1/12 px³, samples every ½ px.
     fn default() -> Self {
         NoiseModel {

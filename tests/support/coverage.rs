@@ -159,7 +159,7 @@ impl NextViewCase {
 /// the geometric mean over `draws` (≥ 1) independent noise draws of its mask, each
 /// refitted: the expected outcome of a photograph from there, which is what a ranking
 /// can predict — a single draw's ADD varies between draws three times as much as the
-/// expected ADD between candidates (BENCHMARKS.md "Next best view"). `None` when the
+/// expected ADD between candidates (docs/benchmark-history.md "Next best view"). `None` when the
 /// 2-view fit fails or is more than 10 % of the diameter off, or the top candidate
 /// does not see the truth whole.
 ///

@@ -5,7 +5,9 @@
 
 mod cameras;
 mod occlusion;
+mod photos;
 mod real;
+mod segmenter;
 mod uncertainty;
 
 #[path = "../support/mod.rs"]

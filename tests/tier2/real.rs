@@ -10,26 +10,13 @@
 //! 22°–66°). Masks are the visible-part masks (`mask_visib/`), the other annotated
 //! objects become each view's ignore mask (`--ignore others`), units metres.
 
-use crate::data;
-use localisebot::io::bop::{self, BopOptions, MaskKind};
-use localisebot::{load_scene, metrics, Estimator, FitSettings, Verdict};
+use localisebot::{metrics, Estimator, FitSettings, Verdict};
 
 /// Imports object `object` with `images` and fits it; returns (ADD, ADD-S) relative
 /// to the diameter, the verdict and the seconds taken.
 fn fit_real(object: u32, images: &[u32]) -> (f64, f64, Option<Verdict>, f64) {
-    let root = data("real/lmo");
-    let mut opts = BopOptions::new(2, object);
-    opts.image_ids = Some(images.to_vec());
-    opts.masks = MaskKind::Visible;
-    opts.ignore_others = true;
-    let imported = bop::import(&|p| std::fs::read(root.join(p)).ok(), &opts).unwrap();
-    assert_eq!(imported.scene.views.len(), 3);
-    let text = imported.scene.to_json_string();
-    let files = imported.files;
-    let scene = load_scene("scene.json", &text, &|p| {
-        files.iter().find(|(rel, _)| rel == p).map(|(_, b)| b.clone())
-    })
-    .unwrap();
+    let scene = crate::photos::import_lmo(object, images, None, true);
+    assert_eq!(scene.views.len(), 3);
     assert!(scene
         .views
         .iter()

