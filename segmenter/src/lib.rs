@@ -134,7 +134,8 @@ pub struct Candidate {
 }
 
 /// The decoder's masks for a prompt: its single-mask output and its three
-/// multimask outputs (whole, part, subpart), and the one SAM itself would return.
+/// multimask outputs (readings of the object at different granularities), and the one
+/// SAM itself would return.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Decoded {
     /// The four masks, SAM's order.

@@ -141,8 +141,9 @@ pub struct MaskReport {
     pub areas: Vec<usize>,
     /// IoU of each round's mask with the previous round's (one fewer than `areas`).
     pub changes: Vec<f64>,
-    /// Which of the segmenter's masks each round took (0: its single-mask reading,
-    /// 1–3: whole, part, subpart); from the second round, the one closest to the fit.
+    /// Which of the segmenter's masks each round took (SAM: 0 its single-mask reading,
+    /// 1–3 its three multimask readings); from the second round, the one closest to the
+    /// fit.
     #[serde(default)]
     pub picks: Vec<usize>,
     /// The segmenter's own IoU estimate for the final mask.

@@ -51,8 +51,9 @@ pub fn sphere_from_boxes(hinted: &[(&Camera, PixelBox, &str)]) -> Result<(DVec3,
     Ok((centre, median(&radii)))
 }
 
-/// The box of the sphere `(centre, radius)` in `camera`, loosened; `None` when it is
-/// behind the camera or outside its image. `view` names the view in errors.
+/// The box of the sphere `(centre, radius)` in `camera`, loosened, clipped to the image.
+///
+/// Errors (naming `view`): the sphere behind or around the camera, or outside its image.
 pub fn box_of_sphere(view: &str, camera: &Camera, centre: DVec3, radius: f64) -> Result<PixelBox> {
     let pc = camera.to_camera(centre);
     if pc.z <= radius.max(0.0) {

@@ -240,9 +240,9 @@ impl PhotoFit {
                 self.pending().len()
             )));
         }
-        let mut all_converged = self.round > 0;
-        for (job, out) in std::mem::take(&mut self.pending).into_iter().zip(outputs) {
-            let Some(Slot::Made(m)) = self.slots.get_mut(job.view) else {
+        // Every answer is checked before any is taken: a wrong one changes nothing.
+        for (job, out) in self.pending.iter().zip(&outputs) {
+            let Some(Slot::Made(m)) = self.slots.get(job.view) else {
                 return Err(Error::Settings(format!(
                     "photographs: view {} is not one to segment",
                     job.view
@@ -260,6 +260,12 @@ impl PhotoFit {
                     ),
                 });
             }
+        }
+        let mut all_converged = self.round > 0;
+        for (job, out) in std::mem::take(&mut self.pending).into_iter().zip(outputs) {
+            let Some(Slot::Made(m)) = self.slots.get_mut(job.view) else {
+                unreachable!("checked above");
+            };
             let (w, h) = (m.photo.camera.width, m.photo.camera.height);
             let mut masks: Vec<(Mask, MaskCandidate)> = out
                 .candidates
@@ -491,4 +497,144 @@ pub fn run(fit: &mut PhotoFit, segmenter: &mut dyn Segmenter, mut progress: impl
         progress(fit);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::{shapes, synth};
+    use crate::io::scene::SceneJson;
+
+    /// A mask of the image cut to `crop` (what a perfect segmenter returns).
+    fn in_crop(m: &Mask, crop: Crop) -> Mask {
+        let mut out = Mask::empty(crop.side, crop.side);
+        for y in 0..crop.side as i64 {
+            for x in 0..crop.side as i64 {
+                let (ix, iy) = (crop.x0 + x, crop.y0 + y);
+                if ix >= 0 && iy >= 0 && ix < m.width as i64 && iy < m.height as i64 && m.get(ix as u32, iy as u32) {
+                    out.data[(y * crop.side as i64 + x) as usize] = 1;
+                }
+            }
+        }
+        out
+    }
+
+    /// Answers with the true silhouette; for view 0 it prefers a wrong reading (the
+    /// silhouette's left half removed) and offers the true one second.
+    struct Fake(Vec<Mask>);
+
+    impl Segmenter for Fake {
+        fn segment(&mut self, jobs: &[SegmentJob], _: &[&Rgba]) -> Result<Vec<SegmentOutput>> {
+            Ok(jobs
+                .iter()
+                .map(|j| {
+                    let full = in_crop(&self.0[j.view], j.crop);
+                    let mut out = SegmentOutput::single(full.clone(), vec![0.0; 16], 0.9);
+                    if j.view == 0 {
+                        let b = PixelBox::of_mask(&full).unwrap();
+                        let mut part = full;
+                        let cut = (0.5 * (b.x0 + b.x1)) as u32;
+                        for y in 0..part.height {
+                            for x in 0..cut.min(part.width) {
+                                part.data[(y * part.width + x) as usize] = 0;
+                            }
+                        }
+                        out.candidates.insert(
+                            0,
+                            MaskCandidate {
+                                mask: part,
+                                logits: vec![0.0; 16],
+                                score: 0.95,
+                            },
+                        );
+                    }
+                    out
+                })
+                .collect())
+        }
+    }
+
+    fn scene() -> (Scene, Vec<Mask>) {
+        let mesh = shapes::toy_plane();
+        let s = synth::SynthSettings {
+            views: 3,
+            width: 160,
+            height: 160,
+            seed: 4,
+            images: true,
+            ..Default::default()
+        };
+        let made = synth::synthesize(&mesh, &s, None).unwrap();
+        let photos = (0..3)
+            .map(|i| PhotoView {
+                name: format!("view{i}"),
+                camera: made.cameras[i],
+                image: made.images[i].clone(),
+                ignore: None,
+                hint: PixelBox::of_mask(&made.masks[i]),
+                index: i,
+            })
+            .collect();
+        let json = SceneJson {
+            version: 1,
+            mesh: "toy.glb".into(),
+            views: Vec::new(),
+            initial_pose: None,
+            ground_truth_pose: None,
+            grasps: Vec::new(),
+        };
+        let scene = Scene {
+            mesh,
+            views: Vec::new(),
+            photos,
+            initial_pose: None,
+            ground_truth_pose: Some(made.pose),
+            grasps: Vec::new(),
+            json,
+            warnings: Vec::new(),
+        };
+        (scene, made.masks)
+    }
+
+    #[test]
+    fn the_fit_chooses_the_reading_that_agrees_with_the_geometry() {
+        let (scene, truth) = scene();
+        let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
+        run(&mut fit, &mut Fake(truth.clone()), |_| {}).unwrap();
+        let reports = fit.reports();
+        // View 0: the segmenter's preference first, then the true reading, chosen by
+        // the fitted silhouette; the other views had one reading each.
+        assert_eq!(reports[0].picks.first(), Some(&0), "{:?}", reports[0].picks);
+        assert_eq!(reports[0].picks.last(), Some(&1), "{:?}", reports[0].picks);
+        assert!(fit.rounds() >= 2);
+        for ((name, mask), t) in fit.masks().iter().zip(&truth) {
+            assert_eq!(metrics::hard_iou(mask.unwrap(), t), 1.0, "{name}");
+        }
+        let r = fit.result(0.0, None).unwrap();
+        assert_eq!(r.verdict, Some(Verdict::Ok));
+        assert_eq!(r.masks.len(), 3);
+    }
+
+    #[test]
+    fn wrong_answers_are_errors_not_panics() {
+        let (scene, truth) = scene();
+        let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
+        assert_eq!(fit.pending().len(), 3);
+        let e = fit.answer(Vec::new()).unwrap_err().to_string();
+        assert!(e.contains("0 answers for 3"), "{e}");
+        let mut answers = Fake(truth.clone()).segment(fit.pending(), &[]).unwrap();
+        answers[1].candidates[0].mask = Mask::empty(3, 3);
+        let e = fit.answer(answers.clone()).unwrap_err().to_string();
+        assert!(e.contains("view1"), "{e}");
+        // Nothing was taken: the same jobs wait, and a good answer is still accepted.
+        assert_eq!(fit.pending().len(), 3);
+        answers[1].candidates[0].mask = answers[0].candidates[0].mask.clone();
+        answers[1].preferred = 7;
+        let e = fit.answer(answers).unwrap_err().to_string();
+        assert!(e.contains("view1") && e.contains("preferred"), "{e}");
+        assert!(fit.advance().is_err(), "advance before a fit");
+        let good = Fake(truth).segment(fit.pending(), &[]).unwrap();
+        fit.answer(good).unwrap();
+        assert!(fit.estimator().is_some());
+    }
 }

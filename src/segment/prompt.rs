@@ -20,7 +20,7 @@ pub struct Crop {
     pub x0: i64,
     /// First row.
     pub y0: i64,
-    /// Side, pixels (≥ 16).
+    /// Side, pixels (at least [`MIN_CROP`] when made by [`Crop::around`]).
     pub side: u32,
 }
 
