@@ -19,15 +19,28 @@ if [ ! -d ../shared/data ]; then
 fi
 
 FAILED=()
+LOGS=target/test-logs # each step's output, kept so that a failure's cause is repeated at the end
+rm -rf "$LOGS" && mkdir -p "$LOGS"
+STEP_N=0
 step() { # step NAME COMMAND...
   local name=$1
   shift
+  STEP_N=$((STEP_N + 1))
+  local log
+  log=$(printf '%s/%02d.log' "$LOGS" "$STEP_N")
   echo "== $name"
-  if ! "$@"; then
+  if ! "$@" 2>&1 | tee "$log"; then
     FAILED+=("$name")
     echo "!! FAILED: $name" >&2
+    echo "$name" >"$log.failed"
   fi
 }
+
+# wasm-bindgen-test-runner gives the browser's whole run 20 s and chromedriver 5 s to
+# start by default; a fresh, busy machine can take longer (a CI run failed so, once).
+# A hang still ends, after these.
+export WASM_BINDGEN_TEST_TIMEOUT=${WASM_BINDGEN_TEST_TIMEOUT:-300}
+export WASM_BINDGEN_TEST_DRIVER_TIMEOUT=${WASM_BINDGEN_TEST_DRIVER_TIMEOUT:-60}
 
 wasm_tests() { # wasm_tests (browser|node) TEST_TARGET... — built as the shipped wasm is (no `softras`)
   local where=$1
@@ -76,6 +89,10 @@ if [ ${#FAILED[@]} -eq 0 ]; then
   echo "all steps passed"
   exit 0
 fi
+for f in "$LOGS"/*.failed; do # the end of each failed step's output, where its cause is
+  echo "-- the last 40 lines of: $(cat "$f")" >&2
+  tail -n 40 "${f%.failed}" >&2
+done
 echo "FAILED steps (${#FAILED[@]}):" >&2
 printf '  - %s\n' "${FAILED[@]}" >&2
 [ -n "$SHARED_NOTE" ] && echo "note: $SHARED_NOTE" >&2
