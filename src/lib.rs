@@ -85,8 +85,9 @@ pub mod wasm;
 pub use camera::{Camera, CameraJson, Convention, MAX_SIDE};
 pub use error::{Error, Result};
 pub use estimator::{
-    CameraCorrection, CameraPrior, CameraTest, Estimator, FitResult, FitSettings, FitSetup, MaskReport, Phase, PoseOut,
-    Progress, Request, Response, Shard, Termination, ViewFigures, ViewResult, OBJECT_MARGIN,
+    competes, Alternative, AlternativeOut, CameraCorrection, CameraPrior, CameraTest, Estimator, FitResult,
+    FitSettings, FitSetup, MaskReport, Phase, PoseOut, Progress, Request, Response, Shard, Termination, ViewFigures,
+    ViewResult, ALTERNATIVE_FACTOR, ALTERNATIVE_SLACK, OBJECT_MARGIN,
 };
 pub use io::scene::{load_scene, Scene, SceneJson, ViewJson};
 pub use loss::objective::ObjectiveSettings;

@@ -1,5 +1,6 @@
-//! The verdict on a fit (SPEC §3): `ok`, `poor` or `failed`, with the views it
-//! doubts, from the per-view hard IoU at full resolution (over known pixels).
+//! The verdict on a fit (SPEC §3): `ok`, `poor`, `ambiguous` or `failed`, with the
+//! views it doubts, from the per-view hard IoU at full resolution (over known pixels)
+//! and the other poses that explain the masks nearly as well ([`ambiguous`]).
 //!
 //! Thresholds ([`VerdictThresholds`], documented defaults): a view *agrees* when its
 //! IoU is at least `ok_iou` (0.85) and *fails* below `fail_iou` (0.5). The fit is
@@ -12,7 +13,7 @@
 
 use serde::{Deserialize, Serialize};
 
-/// The three verdicts.
+/// The four verdicts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
@@ -20,16 +21,20 @@ pub enum Verdict {
     Ok,
     /// Some views disagree, or agree only loosely.
     Poor,
+    /// Another pose, distinct from this one, explains the masks nearly as well: the
+    /// photographs do not tell them apart (the result lists the alternatives).
+    Ambiguous,
     /// The pose explains no majority of the views.
     Failed,
 }
 
 impl Verdict {
-    /// `"ok"`, `"poor"` or `"failed"`.
+    /// `"ok"`, `"poor"`, `"ambiguous"` or `"failed"`.
     pub fn as_str(self) -> &'static str {
         match self {
             Verdict::Ok => "ok",
             Verdict::Poor => "poor",
+            Verdict::Ambiguous => "ambiguous",
             Verdict::Failed => "failed",
         }
     }
@@ -114,6 +119,39 @@ pub fn judge(names: &[&str], ious: &[f64], inconsistent: &[String], t: &VerdictT
     }
 }
 
+/// A competing pose, as the verdict sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rival {
+    /// Its mean full-resolution IoU over the views.
+    pub mean_iou: f64,
+    /// The rotation between it and the fit's pose, degrees (up to the object's symmetries).
+    pub rotation_deg: f64,
+    /// The ADD between the two poses over the object's diameter (up to its symmetries).
+    pub add_rel: f64,
+}
+
+/// The judgement made `ambiguous` when `rivals` (distinct poses that explain the masks
+/// nearly as well as the fit's, of mean IoU `mean_iou`) exist and the fit has not
+/// `failed`: one reason per rival says how far it is and by how much it loses.
+pub fn ambiguous(mut j: Judgement, mean_iou: f64, rivals: &[Rival]) -> Judgement {
+    if rivals.is_empty() || j.verdict == Verdict::Failed {
+        return j;
+    }
+    j.verdict = Verdict::Ambiguous;
+    for (i, r) in rivals.iter().enumerate() {
+        j.reasons.push(format!(
+            "alternative {}: a pose turned {:.0}° from this one (ADD {:.0} % of the diameter apart) explains the masks \
+             nearly as well (mean IoU {:.3} against {:.3}): another view would tell them apart",
+            i + 1,
+            r.rotation_deg,
+            100.0 * r.add_rel,
+            r.mean_iou,
+            mean_iou
+        ));
+    }
+    j
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -137,5 +175,36 @@ mod tests {
             (Verdict::Poor, vec!["c".to_string()])
         );
         assert_eq!(Verdict::Failed.as_str(), "failed");
+    }
+
+    #[test]
+    fn a_rival_makes_a_fit_ambiguous_unless_it_failed() {
+        let t = VerdictThresholds::default();
+        let names = ["a", "b"];
+        let rival = Rival {
+            mean_iou: 0.96,
+            rotation_deg: 179.0,
+            add_rel: 0.4,
+        };
+        let ok = judge(&names, &[0.97, 0.98], &[], &t);
+        assert_eq!(ambiguous(ok.clone(), 0.975, &[]), ok, "no rival: unchanged");
+        let j = ambiguous(ok, 0.975, &[rival]);
+        assert_eq!(j.verdict, Verdict::Ambiguous);
+        assert_eq!(j.reasons.len(), 1);
+        assert!(
+            j.reasons[0].contains("179°") && j.reasons[0].contains("0.960"),
+            "{}",
+            j.reasons[0]
+        );
+        let poor = judge(&names, &[0.97, 0.8], &[], &t);
+        let j = ambiguous(poor, 0.885, &[rival]);
+        assert_eq!(
+            (j.verdict, j.reasons.len()),
+            (Verdict::Ambiguous, 2),
+            "the poor view's reason is kept"
+        );
+        let failed = judge(&names, &[0.1, 0.2], &[], &t);
+        assert_eq!(ambiguous(failed, 0.15, &[rival]).verdict, Verdict::Failed);
+        assert_eq!(Verdict::Ambiguous.as_str(), "ambiguous");
     }
 }

@@ -75,8 +75,9 @@ export interface Progress {
   /** Hard IoU per view at full resolution, at `pose`. */
   iou: number[];
   termination: null | "converged" | "completed" | "stalled";
-  /** The verdict once the fit is done: "ok", "poor" or "failed" (a failed fit is never "converged"). */
-  verdict: null | "ok" | "poor" | "failed";
+  /** The verdict once the fit is done: "ok", "poor", "ambiguous" (another pose explains the masks
+   *  nearly as well: FitResult.alternatives) or "failed" (a failed fit is never "converged"). */
+  verdict: null | "ok" | "poor" | "ambiguous" | "failed";
   /** Why the verdict is not "ok", one line each; the views it doubts. */
   verdict_reasons: string[]; doubted_views: string[];
   done: boolean;
@@ -106,12 +107,25 @@ export interface StdDev {
   translation: number[];
   /** Scale along each model axis, % of the scale. */
   scale_pct: number[];
-  /** The ADD (mean model-point displacement) expected from the covariance and its 95th percentile, scene units. */
+  /** The ADD (mean model-point displacement) expected from the covariance, and the ADD within which the
+   *  truth lies with 95 % confidence (for an ambiguous fit, reaching its alternatives too), scene units. */
   add_mean: number; add_95: number;
+  /** The 95th percentile from this pose's covariance alone. */
+  add_95_alone: number;
   /** The object's diameter at the pose, scene units. */
   diameter: number;
   /** RMS distance between the model's outline and the masks' contours at the optimum, canvas pixels. */
   boundary_rms_px: number;
+}
+/** A pose that competes with the fit's (FitResult.alternatives). */
+export interface Alternative {
+  pose: PoseOut; matrix: number[][];
+  /** Per-view hard IoU at full resolution, and their mean; its loss at the last stage. */
+  view_iou: number[]; mean_iou: number; loss: number;
+  /** The rotation (degrees) and the ADD over the diameter from the fit's pose, up to the object's symmetries. */
+  rotation_deg: number; add_rel: number;
+  /** Its own covariance and standard deviations. */
+  covariance: number[][] | null; std_dev: StdDev | null;
 }
 /** The result of a fit (SPEC §3). */
 export interface FitResult {
@@ -119,8 +133,10 @@ export interface FitResult {
   views: { name: string; iou: number; hausdorff_px: number }[];
   mean_iou: number; loss_history: number[]; iterations: number;
   termination: null | "converged" | "completed" | "stalled";
-  /** "ok", "poor" or "failed", with the reasons and the views it doubts. */
-  verdict: null | "ok" | "poor" | "failed"; verdict_reasons: string[]; doubted_views: string[];
+  /** "ok", "poor", "ambiguous" or "failed", with the reasons and the views it doubts. */
+  verdict: null | "ok" | "poor" | "ambiguous" | "failed"; verdict_reasons: string[]; doubted_views: string[];
+  /** For an ambiguous fit, the other poses that explain the masks nearly as well, best first. */
+  alternatives?: Alternative[];
   /** The pose covariance once done: 9×9 rows in [ω (rad; right tangent, R_true ≈ R·exp([ω]×)), t (scene units), log s]. */
   covariance: number[][] | null;
   /** Its readable standard deviations once done. */

@@ -274,7 +274,7 @@ function statusText(p) {
   return `${prefix}refine: stage ${p.stage + 1}/${p.stages}, candidate ${p.candidate + 1}, iteration ${p.iteration}${loss}, ${secs}`;
 }
 
-// The verdict, plainly: ok / poor / failed, with its reasons and the views it doubts.
+// The verdict, plainly: ok / poor / ambiguous / failed, with its reasons and the views it doubts.
 function showVerdict(p) {
   const el = ui.verdict;
   if (!p.done || !p.verdict) {
@@ -284,7 +284,12 @@ function showVerdict(p) {
   el.hidden = false;
   el.className = `verdict ${p.verdict}`;
   el.dataset.verdict = p.verdict;
-  const label = { ok: 'ok — every view agrees with the pose', poor: 'poor — some views disagree', failed: 'failed — the pose does not explain the masks' }[p.verdict];
+  const label = {
+    ok: 'ok — every view agrees with the pose',
+    poor: 'poor — some views disagree',
+    ambiguous: 'ambiguous — another pose explains the masks nearly as well (magenta in the 3D view); add a view from a suggested camera',
+    failed: 'failed — the pose does not explain the masks',
+  }[p.verdict];
   const doubted = p.doubted_views.length ? ` Doubted: ${p.doubted_views.join(', ')}.` : '';
   el.textContent = `Verdict: ${label}.${doubted}${p.verdict_reasons.length ? ' ' + p.verdict_reasons.join('; ') + '.' : ''}`;
   views.forEach((v, i) => v.fig.classList.toggle('doubted', p.doubted_views.includes(v.name)));

@@ -19,6 +19,7 @@
 export const BACKGROUND = 0x1d2127;
 const OBJECT_COLOUR = 0xd8cfc0; // clay: apart from the suggestion's orange
 const GHOST_COLOUR = 0x5fb3ff;
+const ALTERNATIVE_COLOUR = 0xe040c0; // an ambiguous fit's competing poses
 const CAMERA_COLOUR = 0x9fb4c8;
 const SUGGESTION_COLOUR = 0xff7a00;
 
@@ -50,6 +51,7 @@ export class View3D {
     this.sceneFrames = null; // Session.cameraFrames(): every view's frame, the target, the viewer's start
     this.matrix = null; // the object's pose, object-to-world rows
     this.ghosts = []; // the ghosts' object-to-world matrices, 16 numbers row-major each
+    this.alternatives = []; // an ambiguous fit's alternative poses, the same way
     this.suggestion = null;
     this.frames = 0;
     this.poseUpdates = 0;
@@ -252,6 +254,7 @@ export class View3D {
     if (this.cameraGroup) this.cameraGroup.visible = this.visible.cameras;
     this.cameraGroup?.traverse((o) => o.name === 'picture' && (o.visible = this.visible.pictures));
     if (this.ghostGroup) this.ghostGroup.visible = this.visible.ghosts;
+    if (this.alternativeGroup) this.alternativeGroup.visible = this.visible.ghosts;
     if (this.suggestionGroup) this.suggestionGroup.visible = this.visible.suggestion;
     this.requestRender();
   }
@@ -272,12 +275,14 @@ export class View3D {
   }
 
   // Every message the page receives from the worker for the 3D view:
-  // { scene: {geometry, cameras, pictures, frames}, pose (a matrix), ghosts, suggestions },
+  // { scene: {geometry, cameras, pictures, frames}, pose (a matrix), ghosts, alternatives,
+  // suggestions },
   // any subset.
   apply(msg) {
     if (msg.scene) this.setScene(msg.scene.geometry, msg.scene.cameras, msg.scene.pictures, msg.scene.frames);
     if (msg.pose) this.setPose(msg.pose);
     if ('ghosts' in msg) this.setGhosts(msg.ghosts);
+    if ('alternatives' in msg) this.setAlternatives(msg.alternatives);
     if ('suggestions' in msg) this.setSuggestion(msg.suggestions);
   }
 
@@ -293,6 +298,7 @@ export class View3D {
     this.geometryInfo = { vertices: geometry.positions.length / 3, triangles: geometry.indices.length / 3 };
     this.matrix = null;
     this.ghosts = [];
+    this.alternatives = [];
     this.setSuggestion(null);
     if (!this.gl) {
       this.pending = [geometry, cameras, pictures, frames];
@@ -327,6 +333,10 @@ export class View3D {
     this.ghostGroup = new THREE.Group();
     this.ghostGroup.name = 'ghosts';
     this.world.add(this.ghostGroup);
+    this.alternativeMaterial = new THREE.MeshStandardMaterial({ color: ALTERNATIVE_COLOUR, transparent: true, opacity: 0.4, depthWrite: false, flatShading: true, side: THREE.DoubleSide });
+    this.alternativeGroup = new THREE.Group();
+    this.alternativeGroup.name = 'alternatives';
+    this.world.add(this.alternativeGroup);
 
     // The viewer: where Rust placed it (from above the cameras' side, just far enough
     // to see every camera and the object), looking at the cameras' target.
@@ -413,20 +423,36 @@ export class View3D {
     this.requestRender();
   }
 
+  /**
+   * An ambiguous fit's alternative poses (the result's `alternatives`, their
+   * `matrix` each: 4×4 rows or 16 numbers row-major), drawn as magenta ghosts; or null.
+   */
+  setAlternatives(matrices) {
+    this.alternatives = Array.isArray(matrices)
+      ? matrices.map((m) => [m].flat(2)).filter((m) => m.length === 16 && m.every(Number.isFinite))
+      : [];
+    this.placeGhosts();
+    this.requestRender();
+  }
+
   placeGhosts() {
     if (!this.gl || !this.ghostGroup) return;
     const THREE = this.THREE;
-    const want = this.ghosts.length;
-    while (this.ghostGroup.children.length > want) this.ghostGroup.remove(this.ghostGroup.children.at(-1));
-    while (this.ghostGroup.children.length < want) {
-      const m = new THREE.Mesh(this.mesh, this.ghostMaterial);
-      m.matrixAutoUpdate = false;
-      this.ghostGroup.add(m);
-    }
-    this.ghostGroup.children.forEach((m, i) => {
-      m.matrix.set(...this.ghosts[i]);
-      m.matrixWorldNeedsUpdate = true;
-    });
+    const fill = (group, matrices, material) => {
+      const want = matrices.length;
+      while (group.children.length > want) group.remove(group.children.at(-1));
+      while (group.children.length < want) {
+        const m = new THREE.Mesh(this.mesh, material);
+        m.matrixAutoUpdate = false;
+        group.add(m);
+      }
+      group.children.forEach((m, i) => {
+        m.matrix.set(...matrices[i]);
+        m.matrixWorldNeedsUpdate = true;
+      });
+    };
+    fill(this.ghostGroup, this.ghosts, this.ghostMaterial);
+    fill(this.alternativeGroup, this.alternatives ?? [], this.alternativeMaterial);
   }
 
   /**
@@ -476,6 +502,8 @@ export class View3D {
       objectMatrix: this.object ? rows(this.object.matrix) : null,
       ghosts: this.ghostGroup?.children.length ?? this.ghosts.length,
       ghostMatrices: this.ghostGroup?.children.map((g) => rows(g.matrix)) ?? [],
+      alternatives: this.alternativeGroup?.children.length ?? this.alternatives.length,
+      alternativeMatrices: this.alternativeGroup?.children.map((g) => rows(g.matrix)) ?? [],
       suggestion: Boolean(this.gl ? this.suggestionGroup?.getObjectByName('suggestion:best') : this.suggestion),
       suggestions: this.suggestion?.length ?? 0,
       poseUpdates: this.poseUpdates,
@@ -488,12 +516,13 @@ export class View3D {
   clearWorld() {
     for (const child of [...this.world.children]) {
       this.world.remove(child);
-      if (child !== this.object && child !== this.ghostGroup) disposeTree(child);
+      if (child !== this.object && child !== this.ghostGroup && child !== this.alternativeGroup) disposeTree(child);
     }
     this.mesh?.dispose();
     this.objectMaterial?.dispose();
     this.ghostMaterial?.dispose();
-    this.cameraGroup = this.object = this.ghostGroup = this.suggestionGroup = null;
+    this.alternativeMaterial?.dispose();
+    this.cameraGroup = this.object = this.ghostGroup = this.alternativeGroup = this.suggestionGroup = null;
   }
 
   dispose() {

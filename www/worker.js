@@ -347,7 +347,8 @@ const handlers = {
 // After a load: the mesh for display, the cameras, each view's picture and the frames
 // Rust computes for drawing them (Session.cameraFrames). When the fit is done: GHOSTS
 // ghosts of the result (Session.ghosts: object-to-world matrices drawn from its
-// covariance, seeded; none until the result has one) and, when the wasm has
+// covariance, seeded; none until the result has one), an ambiguous fit's alternative
+// poses (the result's `alternatives`) and, when the wasm has
 // Session.suggestViews, the 3 best next views (from the upper half of the sphere with
 // "next view from above"), each with its frame (framesOfCameras). When it is no longer
 // done (Reset), both are cleared. A failure here is reported to the page's 3D view only.
@@ -378,14 +379,16 @@ function done3d(progress) {
   if (progress.done === finished3d) return;
   finished3d = progress.done;
   if (!progress.done) {
-    post({ type: 'view3d', ghosts: null, suggestions: null });
+    post({ type: 'view3d', ghosts: null, alternatives: null, suggestions: null });
     post({ type: 'cameras', corrections: null, error: null });
     return;
   }
-  const msg = { type: 'view3d', ghosts: null, suggestions: null };
+  const msg = { type: 'view3d', ghosts: null, alternatives: null, suggestions: null };
   try {
     const result = session.result();
     msg.ghosts = session.ghosts(GHOSTS, GHOST_SEED);
+    // An ambiguous fit's alternatives (FitResult.alternatives), drawn as ghosts of their own colour.
+    msg.alternatives = (result.alternatives ?? []).map((a) => a.matrix);
     post({ type: 'cameras', corrections: result.camera_corrections ?? null, test: result.camera_test ?? null, error: result.camera_correction_error ?? null });
     msg.suggestions = suggestions();
   } catch (e) {

@@ -297,6 +297,7 @@ mod tests {
                 camera_correction_error: None,
                 camera_test: None,
                 seconds: 1.0,
+                alternatives: Vec::new(),
                 masks: Vec::new(),
                 errors: Some(errors),
                 symmetric: Some(false),

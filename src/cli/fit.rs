@@ -52,7 +52,7 @@ pub struct FitOptions {
     /// Orientation candidates: `uniform:N` (default uniform:512) or the paper's grid `euler:K` (K³ candidates).
     #[arg(long)]
     pub search: Option<String>,
-    /// How many of the best search candidates to refine (default 4).
+    /// How many of the best search candidates to refine (default 12).
     #[arg(long)]
     pub keep: Option<usize>,
     /// Weight λ1 of the soft IoU loss (default 1).
@@ -394,6 +394,13 @@ fn report(
                 100.0 * sd.add_95 / sd.diameter.max(f64::MIN_POSITIVE),
                 sd.boundary_rms_px
             );
+            if !result.alternatives.is_empty() {
+                eprintln!(
+                    "  the 95% bound covers the {} alternative pose(s) (this pose alone: ADD within {:.3e}); they are in the result's \"alternatives\"; `suggest-view` ranks the views that tell them apart first",
+                    result.alternatives.len(),
+                    sd.add_95_alone
+                );
+            }
         }
         (None, Some(e)) => eprintln!("  uncertainty: not measured: {e}"),
         (None, None) => {}

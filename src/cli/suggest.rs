@@ -11,7 +11,7 @@ use super::files::{load_masked_scene_file, load_pose, read_text, to_json, CliRes
 use super::fit::ScaleArg;
 use clap::Args;
 use localisebot::uncertainty::Viewpoints;
-use localisebot::{Camera, CameraJson, FitResult, FitSettings, FitSetup, ScaleMode};
+use localisebot::{Camera, CameraJson, FitResult, FitSettings, FitSetup, Pose, ScaleMode};
 use std::path::{Path, PathBuf};
 
 /// `suggest-view`'s arguments.
@@ -77,7 +77,7 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
     let in_scene = |e: localisebot::Error| format!("{}: {e}", a.scene.display());
     let setup = FitSetup::new(scene.mesh, scene.views, settings).map_err(in_scene)?;
     let ranked = setup
-        .suggest_views(&pose, &fit.weights, candidates.as_deref(), shell)
+        .suggest_views(&pose, &fit.weights, &fit.alternatives, candidates.as_deref(), shell)
         .map_err(in_scene)?;
     let usable: Vec<_> = ranked.iter().filter(|r| r.predicted_add_rms.is_finite()).collect();
     if usable.is_empty() {
@@ -99,9 +99,21 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
         usable.len(),
         ranked[0].current_add_rms
     );
-    for (k, r) in best.iter().enumerate() {
+    if !fit.alternatives.is_empty() {
         eprintln!(
-            "  {}. candidate {}: expected RMS ADD with it {:.4e} ({:.0}% of now), outline {:.0} px",
+            "the fit is ambiguous ({} alternative poses): the views that tell them apart come first",
+            fit.alternatives.len()
+        );
+    }
+    for (k, r) in best.iter().enumerate() {
+        let telling = r.discrimination.map_or(String::new(), |d| {
+            format!(
+                ", silhouettes of the fit and the most alike alternative differ by {:.0}% (1 − IoU)",
+                100.0 * d
+            )
+        });
+        eprintln!(
+            "  {}. candidate {}: expected RMS ADD with it {:.4e} ({:.0}% of now), outline {:.0} px{telling}",
             k + 1,
             r.index,
             r.predicted_add_rms,
@@ -114,10 +126,13 @@ pub fn run(a: &SuggestArgs) -> CliResult<()> {
     Ok(())
 }
 
-/// What `suggest-view` plans with from the fit: each view's weight and the scale mode.
+/// What `suggest-view` plans with from the fit: each view's weight, the scale mode and
+/// the alternatives' poses (an `ambiguous` fit: the candidates that tell them apart
+/// come first).
 struct FitOf {
     weights: Vec<f64>,
     scale_mode: ScaleMode,
+    alternatives: Vec<Pose>,
 }
 
 /// The views' weights and the scale mode of a result file (a pose file: every view
@@ -131,6 +146,7 @@ fn fit_of(path: &Path, views: &[localisebot::View]) -> CliResult<FitOf> {
         return Ok(FitOf {
             weights: vec![1.0; views.len()],
             scale_mode: ScaleMode::Anisotropic,
+            alternatives: Vec::new(),
         });
     }
     let result: FitResult = serde_json::from_value(value).map_err(|e| format!("{name}: not a result file: {e}"))?;
@@ -145,9 +161,19 @@ fn fit_of(path: &Path, views: &[localisebot::View]) -> CliResult<FitOf> {
                 .ok_or_else(|| format!("{name}: the result has no view \"{}\" of the scene", v.name()))
         })
         .collect::<CliResult<Vec<f64>>>()?;
+    let alternatives = result
+        .alternatives
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            let json = serde_json::to_string(&a.pose).expect("serialising plain data cannot fail");
+            Pose::from_json_str(&json, &format!("{name}: alternative {i}")).map_err(|e| e.to_string())
+        })
+        .collect::<CliResult<Vec<Pose>>>()?;
     Ok(FitOf {
         weights,
         scale_mode: result.scale_mode,
+        alternatives,
     })
 }
 

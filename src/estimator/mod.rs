@@ -34,8 +34,8 @@ mod setup;
 mod shard;
 
 pub use cameras::{CameraCorrection, CameraPrior, CameraTest};
-pub use finish::ViewFigures;
-pub use result::{FitResult, MaskReport, PoseOut, ViewResult};
+pub use finish::{competes, Alternative, ViewFigures, ALTERNATIVE_FACTOR, ALTERNATIVE_SLACK};
+pub use result::{AlternativeOut, FitResult, MaskReport, PoseOut, ViewResult};
 pub use settings::{FitSettings, Phase, Progress, Termination, OBJECT_MARGIN};
 pub use setup::FitSetup;
 pub use shard::{Request, Response, Shard};

@@ -2,6 +2,15 @@
 //! stage, coarse to fine — each iteration one evaluation of the stage's objective and
 //! one optimiser step — then ranked, the best kept for the next stage; after the
 //! first stage, the leave-one-out consensus test and the views' robust weights.
+//!
+//! Rivals: at a stage's end, besides the `keep` best, up to [`RIVALS`] candidates go on
+//! that are distinct from every one kept (ADD ≥ [`DISTINCT_ADD`] of the diameter, up to
+//! the object's symmetries) and score within [`RIVAL_GAP`] of the best. Each stage
+//! re-ranks them with the others on the same footing — the last at full detail — so a
+//! pose that won the coarse search by a hair can still lose to its flipped twin; what
+//! is left of them at the end is what [`finish`](super::finish) weighs as
+//! alternatives. When the masks tell the poses apart early, no rival passes the gap and
+//! the refinement costs what it did.
 
 use super::robust::{leave_one_out, robust_weights};
 use super::setup::FitSetup;
@@ -17,6 +26,17 @@ use crate::pose::Pose;
 
 /// A candidate whose best loss has not improved for this many iterations is done.
 pub(super) const PATIENCE: usize = 25;
+
+/// At most this many rivals go on beside a stage's `keep` best (module doc).
+pub(super) const RIVALS: usize = 2;
+
+/// A rival's mean hard IoU at the stage's resolution is at most this far below the
+/// best's.
+pub(super) const RIVAL_GAP: f64 = 0.08;
+
+/// Two poses are distinct when their ADD (up to the object's symmetries) is at least
+/// this fraction of the diameter: the usual line between a right and a wrong pose.
+pub(crate) const DISTINCT_ADD: f64 = 0.1;
 
 /// One candidate being refined.
 #[derive(Debug, Clone)]
@@ -202,7 +222,23 @@ impl Estimator {
             .collect();
         scored.sort_by(|a, b| b.0.total_cmp(&a.0));
         let keep = settings.stages[r.stage].keep;
-        r.tracks = scored.into_iter().take(keep).map(|(_, t)| t).collect();
+        let best = scored.first().map_or(0.0, |s| s.0);
+        let mut kept: Vec<Track> = Vec::new();
+        let mut rivals = 0;
+        for (score, t) in scored {
+            if kept.len() < keep {
+                kept.push(t);
+            } else if rivals < RIVALS
+                && score >= best - RIVAL_GAP
+                && kept
+                    .iter()
+                    .all(|k| self.setup.separation(&k.pose, &t.pose).add_rel >= DISTINCT_ADD)
+            {
+                kept.push(t);
+                rivals += 1;
+            }
+        }
+        r.tracks = kept;
         r.current = 0;
         if r.stage == 0 && settings.robust {
             for t in &mut r.tracks {
@@ -222,8 +258,9 @@ impl Estimator {
             }
         }
         if r.stage + 1 == settings.stages.len() {
-            let winner = r.tracks.swap_remove(0);
-            let done = self.finish(winner);
+            let mut tracks = std::mem::take(&mut r.tracks);
+            let winner = tracks.remove(0);
+            let done = self.finish(winner, tracks);
             self.state = State::Done(Box::new(done));
             return Ok(());
         }

@@ -83,7 +83,8 @@ pub struct FitResult {
     /// Which scale parameters were fitted (`suggest-view` plans for the same).
     #[serde(default = "anisotropic")]
     pub scale_mode: ScaleMode,
-    /// `ok`, `poor` or `failed` (see [`crate::Verdict`]); absent before the fit ends.
+    /// `ok`, `poor`, `ambiguous` or `failed` (see [`crate::Verdict`]); absent before the
+    /// fit ends.
     #[serde(default)]
     pub verdict: Option<Verdict>,
     /// Why the verdict is not `ok`, one line each.
@@ -122,10 +123,42 @@ pub struct FitResult {
     /// ground truth was given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub symmetric: Option<bool>,
+    /// Other poses that explain the masks nearly as well (verdict `ambiguous`), best
+    /// first; absent when there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub alternatives: Vec<AlternativeOut>,
     /// The masks the fit made from photographs, and how they came about (absent when
     /// every view gave its mask).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub masks: Vec<MaskReport>,
+}
+
+/// A pose that competes with the fit's (an entry of the result's `alternatives`).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct AlternativeOut {
+    /// The pose.
+    pub pose: PoseOut,
+    /// 4×4 object-to-world matrix, row-major.
+    pub matrix: [[f64; 4]; 4],
+    /// Its per-view hard IoU at full resolution, in the views' order.
+    pub view_iou: Vec<f64>,
+    /// Their mean.
+    pub mean_iou: f64,
+    /// Its loss at the last stage.
+    pub loss: f64,
+    /// The rotation from the fit's pose, degrees (up to the object's symmetries).
+    pub rotation_deg: f64,
+    /// The ADD from the fit's pose over the diameter (up to the symmetries).
+    pub add_rel: f64,
+    /// Its own covariance (as the result's `covariance`), when it could be measured.
+    #[serde(default)]
+    pub covariance: Option<[[f64; 9]; 9]>,
+    /// Its own standard deviations, when measured.
+    #[serde(default)]
+    pub std_dev: Option<StdDev>,
+    /// Its error figures against the scene's ground truth, when it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub errors: Option<PoseErrors>,
 }
 
 /// How one mask made from a photograph came about (an entry of the result's `masks`).
@@ -178,14 +211,29 @@ impl Estimator {
         let mean_iou = views.iter().map(|v| v.iou).sum::<f64>() / views.len().max(1) as f64;
         let progress = self.snapshot(Vec::new());
         let judgement = self.judgement();
-        let (errors, symmetric) = match ground_truth {
-            None => (None, None),
-            Some(gt) => {
-                let syms = symmetry::symmetries(self.mesh());
-                let truth = symmetry::closest_equivalent(self.mesh(), &syms, &pose, gt);
-                (Some(pose_errors(self.mesh(), &pose, &truth)), Some(syms.len() > 1))
-            }
+        let syms = ground_truth.map(|_| symmetry::symmetries(self.mesh()));
+        let errors_of = |p: &Pose| {
+            let (gt, syms) = (ground_truth?, syms.as_ref()?);
+            let truth = symmetry::closest_equivalent(self.mesh(), syms, p, gt);
+            Some(pose_errors(self.mesh(), p, &truth))
         };
+        let (errors, symmetric) = (errors_of(&pose), syms.as_ref().map(|s| s.len() > 1));
+        let alternatives = self
+            .alternatives()
+            .iter()
+            .map(|a| AlternativeOut {
+                pose: PoseOut::from_pose(&a.pose),
+                matrix: mat4_to_rows(a.pose.matrix()),
+                view_iou: a.views.iter().map(|f| f.iou).collect(),
+                mean_iou: a.mean_iou,
+                loss: a.loss,
+                rotation_deg: a.rotation_deg,
+                add_rel: a.add_rel,
+                covariance: a.uncertainty.as_ref().ok().map(|u| u.covariance_rows()),
+                std_dev: a.uncertainty.as_ref().ok().map(|u| u.std_dev.clone()),
+                errors: errors_of(&a.pose),
+            })
+            .collect();
         // Once done, `pose` is the final pose the uncertainty was measured at.
         let (covariance, std_dev, uncertainty_error) = match self.uncertainty() {
             Some(Ok(u)) => (Some(u.covariance_rows()), Some(u.std_dev.clone()), None),
@@ -218,6 +266,7 @@ impl Estimator {
             seconds,
             errors,
             symmetric,
+            alternatives,
             masks: Vec::new(),
         }
     }

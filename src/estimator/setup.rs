@@ -15,7 +15,20 @@ use crate::uncertainty::{
 };
 use crate::view::View;
 use crate::window::Window;
+use crate::{metrics, symmetry};
 use glam::{DMat3, DVec3};
+use std::sync::OnceLock;
+
+/// How far apart two poses are, up to the object's symmetries ([`FitSetup::separation`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Separation {
+    /// The rotation between them, degrees.
+    pub rotation_deg: f64,
+    /// Their ADD, scene units.
+    pub add: f64,
+    /// Their ADD over the object's diameter.
+    pub add_rel: f64,
+}
 
 /// The inputs of a fit, prepared once (module doc).
 pub struct FitSetup {
@@ -33,6 +46,9 @@ pub struct FitSetup {
     pub(crate) radius: f64,
     /// The search's candidate rotations.
     pub(crate) rotations: Vec<DMat3>,
+    /// The mesh's symmetries and its diameter (model frame), measured when first asked
+    /// for ([`FitSetup::separation`]).
+    shape: OnceLock<(Vec<DMat3>, f64)>,
 }
 
 impl FitSetup {
@@ -59,7 +75,24 @@ impl FitSetup {
             views,
             windows,
             settings,
+            shape: OnceLock::new(),
         })
+    }
+
+    /// How far apart two poses of the object are, up to its symmetries: the rotation
+    /// between them (degrees) and their ADD over the object's diameter (at `a`'s mean
+    /// scale), both taken at the symmetric equivalent of `b` closest to `a`.
+    pub(crate) fn separation(&self, a: &Pose, b: &Pose) -> Separation {
+        let mesh = self.mesh();
+        let (syms, diameter) = self.shape.get_or_init(|| (symmetry::symmetries(mesh), mesh.diameter()));
+        let b = symmetry::closest_equivalent(mesh, syms, a, b);
+        let d = diameter * (a.scale.element_sum() / 3.0);
+        let add = metrics::add(mesh, a, &b);
+        Separation {
+            rotation_deg: metrics::rotation_error_deg(a, &b),
+            add,
+            add_rel: if d > 0.0 { add / d } else { 0.0 },
+        }
     }
 
     /// The mesh being fitted.
@@ -97,13 +130,16 @@ impl FitSetup {
     /// aside), best first (`crate::uncertainty::next_view`): `candidates`, or
     /// [`next_view::SPHERE`] viewpoints over `shell` around the object. The one
     /// function behind [`Estimator::suggest_views`](super::Estimator::suggest_views),
-    /// `suggest-view` and the page's `Session.suggestViews`.
+    /// `suggest-view` and the page's `Session.suggestViews`. With `alternatives` (the
+    /// poses of an `ambiguous` fit), the candidates that would best tell them apart come
+    /// first ([`next_view::discriminate`]).
     ///
     /// Errors: the uncertainty cannot be measured, or a render fails.
     pub fn suggest_views(
         &self,
         pose: &Pose,
         weights: &[f64],
+        alternatives: &[Pose],
         candidates: Option<&[Camera]>,
         shell: Viewpoints,
     ) -> Result<Vec<RankedView>> {
@@ -125,7 +161,9 @@ impl FitSetup {
             self.settings.scale_mode,
             &noise,
         )?;
-        rank_views(&self.model, pose, &u, candidates, &noise)
+        let mut ranked = rank_views(&self.model, pose, &u, candidates, &noise)?;
+        next_view::discriminate(self.mesh(), pose, alternatives, &mut ranked);
+        Ok(ranked)
     }
 
     /// The optimiser's length unit at `pose`: the object's radius in the world.

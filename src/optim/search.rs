@@ -28,7 +28,8 @@ pub enum Sampling {
 pub struct SearchSettings {
     /// Candidate rotations (default `Uniform(512)`).
     pub sampling: Sampling,
-    /// How many of the best distinct candidates to keep (default 4).
+    /// How many of the best distinct candidates to keep (default 12: with 4, two-view
+    /// real scenes lost the true basin — LM-O holepuncher, eggbox, ape — to a flipped one).
     pub keep: usize,
     /// Canvas pixels across each view's window at which candidates are scored (default 64).
     pub resolution: u32,
@@ -42,7 +43,7 @@ impl Default for SearchSettings {
     fn default() -> Self {
         SearchSettings {
             sampling: Sampling::Uniform(512),
-            keep: 4,
+            keep: 12,
             resolution: 64,
             min_separation_deg: 30.0,
             refit_rounds: 2,

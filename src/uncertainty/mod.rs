@@ -107,8 +107,14 @@ pub struct StdDev {
     pub scale_pct: [f64; 3],
     /// The ADD (mean model-point displacement) expected from the covariance, scene units.
     pub add_mean: f64,
-    /// Its 95th percentile: the ADD of 95 % of poses drawn from the covariance is below.
+    /// The ADD within which the truth lies with 95 % confidence: the 95th percentile of
+    /// the ADD of poses drawn from the covariance ([`StdDev::add_95_alone`]) — or, when
+    /// the fit has alternatives (`ambiguous`), the larger bound that reaches each
+    /// alternative's own: a mixture, not one Gaussian.
     pub add_95: f64,
+    /// The 95th percentile from this pose's covariance alone.
+    #[serde(default)]
+    pub add_95_alone: f64,
     /// The object's diameter at the pose (scale applied), scene units: `add_95 /
     /// diameter` is comparable with the ADD threshold of 10 % of the diameter.
     pub diameter: f64,
@@ -250,6 +256,7 @@ pub fn std_dev(mesh: &Mesh, pose: &Pose, cov: &Mat9, boundary_rms_px: f64) -> St
         scale_pct: [6, 7, 8].map(|i| 100.0 * sd(i)),
         add_mean: mean,
         add_95: p95,
+        add_95_alone: p95,
         boundary_rms_px,
     }
 }

@@ -38,6 +38,39 @@ pub struct RankedView {
     pub current_add_rms: f64,
     /// The object's outline length in the candidate's window, pixels.
     pub outline_px: f64,
+    /// When the fit has alternatives (`ambiguous`): how well a photograph from here
+    /// tells them apart from the fit — `1 − IoU` between the fit's silhouette and the
+    /// most alike alternative's, seen from here ([`discriminate`]); `None` otherwise.
+    pub discrimination: Option<f64>,
+}
+
+/// Re-ranks `ranked` (of the fit at `pose`) for a fit with `alternatives`: by how well
+/// a photograph from each candidate would tell them apart — the smallest `1 − IoU`
+/// between the fit's silhouette and an alternative's there, in steps of 0.05 (so that
+/// views about as telling are ranked by their predicted ADD, as before), most telling
+/// first. A candidate that does not see the object keeps its infinite ADD, last.
+pub fn discriminate(mesh: &crate::mesh::Mesh, pose: &Pose, alternatives: &[Pose], ranked: &mut [RankedView]) {
+    if alternatives.is_empty() {
+        return;
+    }
+    for r in ranked.iter_mut() {
+        if !r.predicted_add_rms.is_finite() {
+            continue;
+        }
+        let fit = hard::render(mesh, pose, &r.camera);
+        let d = alternatives
+            .iter()
+            .map(|a| 1.0 - crate::metrics::hard_iou(&fit, &hard::render(mesh, a, &r.camera)))
+            .fold(f64::INFINITY, f64::min);
+        r.discrimination = Some(d);
+    }
+    let step = |r: &RankedView| r.discrimination.map_or(-1, |d| (d / 0.05).floor() as i64);
+    ranked.sort_by(|a, b| {
+        step(b)
+            .cmp(&step(a))
+            .then(a.predicted_add_rms.total_cmp(&b.predicted_add_rms))
+            .then(a.index.cmp(&b.index))
+    });
 }
 
 /// Where the default candidate viewpoints lie.
@@ -132,6 +165,7 @@ pub fn rank_views(
             predicted_add_rms: f64::INFINITY,
             current_add_rms: current,
             outline_px: 0.0,
+            discrimination: None,
         };
         if let Some(canvas) = object_canvas(model, pose, cam) {
             let (hc, length) = outline_information(model, pose, &canvas, noise)?;

@@ -23,6 +23,9 @@ struct Suggestion {
     current_add_rms: f64,
     /// The object's outline length seen from there, pixels.
     outline_px: f64,
+    /// For an ambiguous fit: 1 − IoU between the fit's and the most alike
+    /// alternative's silhouettes seen from there (null otherwise).
+    discrimination: Option<f64>,
 }
 
 #[wasm_bindgen(typescript_custom_section)]
@@ -36,6 +39,9 @@ export interface Suggestion {
   predicted_add_rms: number; current_add_rms: number;
   /** The object's outline length seen from there, pixels. */
   outline_px: number;
+  /** For an ambiguous fit: 1 − IoU between the fit's and the most alike alternative's
+   *  silhouettes seen from there (the views that tell them apart come first); else null. */
+  discrimination: number | null;
 }
 "#;
 
@@ -67,6 +73,7 @@ impl Session {
                 predicted_add_rms: r.predicted_add_rms,
                 current_add_rms: r.current_add_rms,
                 outline_px: r.outline_px,
+                discrimination: r.discrimination,
             })
             .collect();
         to_js(&out)

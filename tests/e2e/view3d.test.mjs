@@ -362,6 +362,23 @@ test('uncertainty: the finished fit\'s ghosts from Rust, spread as its standard 
   assert.ok(maxDiff(g.ghostMatrices[0], moved[0]) < 1e-12);
   await call(page, (v, m) => v.setGhosts(m), s0.ghostMatrices); // the worker's again
   assert.equal((await info(page)).ghosts, 12);
+  // An ambiguous fit's alternatives (the result's `alternatives[].matrix`, 4×4 rows): the toy
+  // fit has none, so the worker posted none; given ones are drawn in their own colour, apart
+  // from the ghosts, and cleared with null.
+  assert.equal(s0.alternatives, 0, 'the toy fit is not ambiguous');
+  await call(page, (v) => v.setGhosts(null));
+  await rendered(page);
+  const noGhosts = await glPixels(page);
+  await call(page, (v, m) => v.setAlternatives(m), [rows]);
+  await rendered(page);
+  const a = await info(page);
+  assert.equal(a.alternatives, 1);
+  assert.equal(a.ghosts, 0, 'the alternatives are not ghosts');
+  assert.ok(maxDiff(a.alternativeMatrices[0], moved[0]) < 1e-12, 'drawn at the matrix given');
+  assert.notEqual((await glPixels(page)).sum, noGhosts.sum, 'the alternative changes the picture');
+  await call(page, (v) => v.setAlternatives(null));
+  assert.equal((await info(page)).alternatives, 0);
+  await call(page, (v, m) => v.setGhosts(m), s0.ghostMatrices);
   assert.deepEqual(page.problems, []);
 });
 

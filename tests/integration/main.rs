@@ -3,6 +3,7 @@
 //! `tests/tier2` (`cargo test --test tier2`, run by `scripts/test.sh`).
 #![cfg(not(target_arch = "wasm32"))]
 
+mod ambiguity;
 mod cli;
 mod edge_raster;
 mod estimator;

@@ -31,7 +31,10 @@ pub struct CoverageCase {
     pub seed: u64,
     /// Its number of views.
     pub views: usize,
-    /// `eᵀΣ⁻¹e` of the true error e under the reported Σ.
+    /// Whether the fit was `ambiguous` (its region then the union of its poses').
+    pub ambiguous: bool,
+    /// `eᵀΣ⁻¹e` of the true error e under the reported Σ (for an ambiguous fit, the
+    /// smallest over its pose and its alternatives, each under its own Σ).
     pub mahalanobis_sq: f64,
     /// The true ADD, scene units.
     pub add: f64,
@@ -92,10 +95,19 @@ pub fn coverage_case(mesh: &Mesh, seed: u64, scenes: &CoverageScenes) -> Result<
     let e = pose_error(&pose, &scene.pose);
     let cov: &Mat9 = &u.covariance;
     let sd = u.std_dev.rotation_deg;
+    let mode = est.settings().scale_mode;
+    // An ambiguous fit's 95 % region is a mixture's: the union of its poses' ellipsoids.
+    let mut m2 = mahalanobis_sq(cov, &e, mode)?;
+    for a in est.alternatives() {
+        if let Ok(ua) = &a.uncertainty {
+            m2 = m2.min(mahalanobis_sq(&ua.covariance, &pose_error(&a.pose, &scene.pose), mode)?);
+        }
+    }
     Ok(Some(CoverageCase {
         seed,
         views,
-        mahalanobis_sq: mahalanobis_sq(cov, &e, est.settings().scale_mode)?,
+        ambiguous: !est.alternatives().is_empty(),
+        mahalanobis_sq: m2,
         add: metrics::add(mesh, &pose, &scene.pose),
         add_95: u.std_dev.add_95,
         rotation_deg: metrics::rotation_error_deg(&pose, &scene.pose),

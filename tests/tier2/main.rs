@@ -3,6 +3,7 @@
 //! not in `cargo test`: `cargo test --test tier2` (`scripts/test.sh` runs it).
 #![cfg(not(target_arch = "wasm32"))]
 
+mod ambiguity;
 mod cameras;
 mod occlusion;
 mod photos;

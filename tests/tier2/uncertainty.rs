@@ -39,8 +39,15 @@ fn the_95_percent_bound_holds_the_truth_in_85_to_99_percent_of_fits() {
         );
         for c in set.iter() {
             println!(
-                "  seed {} ({} views): m² {:.2}, rotation error {:.3}° (sd {:.3}°), ADD {:.5} (95 % bound {:.5})",
-                c.seed, c.views, c.mahalanobis_sq, c.rotation_deg, c.rotation_sd_deg, c.add, c.add_95
+                "  seed {} ({} views{}): m² {:.2}, rotation error {:.3}° (sd {:.3}°), ADD {:.5} (95 % bound {:.5})",
+                c.seed,
+                c.views,
+                if c.ambiguous { ", ambiguous" } else { "" },
+                c.mahalanobis_sq,
+                c.rotation_deg,
+                c.rotation_sd_deg,
+                c.add,
+                c.add_95
             );
         }
         // Failed fits are not counted; nearly every fit must count.
@@ -54,6 +61,12 @@ fn the_95_percent_bound_holds_the_truth_in_85_to_99_percent_of_fits() {
         100.0 * ell,
         100.0 * add
     );
+    println!(
+        "  of which two-view fits {}, ambiguous fits (their region the union of their poses') {}",
+        all.iter().filter(|c| c.views == 2).count(),
+        all.iter().filter(|c| c.ambiguous).count()
+    );
+    assert!(all.iter().any(|c| c.views == 2), "the two-view fits are counted");
     assert!(
         (0.85..=0.99).contains(&ell),
         "coverage of the 95 % ellipsoid {:.1} %",
