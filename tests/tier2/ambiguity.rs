@@ -2,7 +2,7 @@
 //! that lands on the wrong one must say so (`ambiguous`, with the right pose among its
 //! alternatives) rather than report `ok`. Counted on two-view sets of the LM-O
 //! photographs (every pair of the three views `real.rs` fits) and on synthetic
-//! two-view Duck scenes, clean and with 1 px boundary noise; and, the other way, how
+//! two-view Duck scenes, clean and with 1 or 2 px boundary noise; and, the other way, how
 //! often a right fit of three or four views is flagged.
 //!
 //! Right: ADD < 10 % of the diameter (ADD-S for the symmetric eggbox and glue, as in
@@ -166,11 +166,13 @@ fn two_view_fits_are_right_or_say_which_poses_compete() {
         .collect();
     let clean = synthetic(2, 0..16, 0.0);
     let noisy = synthetic(2, 0..16, 1.0);
+    let noisier = synthetic(2, 16..32, 2.0);
     let mut all = Vec::new();
     for (name, set) in [
         ("LM-O, two views", &real),
         ("synthetic Duck, two views, clean", &clean),
         ("synthetic Duck, two views, 1 px noise", &noisy),
+        ("synthetic Duck, two views, 2 px noise", &noisier),
     ] {
         let [right, flagged, confident, other, _] = counts(name, set);
         assert_eq!(confident, 0, "{name}: a wrong fit reported ok");
