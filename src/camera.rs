@@ -101,6 +101,24 @@ impl CameraJson {
                 format!("focal lengths must be positive (fx = {}, fy = {})", self.fx, self.fy),
             ));
         }
+        let (lo, hi) = crate::limits::FOCAL_RANGE_PX;
+        for (name, v) in [("fx", self.fx), ("fy", self.fy)] {
+            if !(lo..=hi).contains(&v) {
+                return Err(cam_err(
+                    view,
+                    format!("{name} = {v:e} pixels is outside the focal lengths accepted ({lo:e} to {hi:e})"),
+                ));
+            }
+        }
+        let c = crate::limits::MAX_PRINCIPAL_PX;
+        for (name, v) in [("cx", self.cx), ("cy", self.cy)] {
+            if v.abs() > c {
+                return Err(cam_err(
+                    view,
+                    format!("{name} = {v:e} pixels is beyond ±{c:e}: the principal point must be near the image"),
+                ));
+            }
+        }
         if self.width == 0 || self.height == 0 || self.width > MAX_SIDE || self.height > MAX_SIDE {
             return Err(cam_err(
                 view,
@@ -179,6 +197,11 @@ fn rigid_inverse(m: DMat4) -> DMat4 {
 fn check_rigid(view: &str, key: &str, rows: [[f64; 4]; 4]) -> Result<(DMat4, f64)> {
     if rows.iter().flatten().any(|v| !v.is_finite()) {
         return Err(cam_err(view, format!("{key} contains a non-finite number")));
+    }
+    for (i, row) in rows.iter().take(3).enumerate() {
+        if let Some(p) = crate::limits::length_problem(row[3]) {
+            return Err(cam_err(view, format!("{key}'s translation (row {i}, column 3) {p}")));
+        }
     }
     let last = rows[3];
     if last[0].abs() > 1e-6 || last[1].abs() > 1e-6 || last[2].abs() > 1e-6 || (last[3] - 1.0).abs() > 1e-6 {

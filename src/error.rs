@@ -113,6 +113,15 @@ pub enum Error {
     /// scene files or meshes, a view without a mask…).
     #[error("{0}")]
     Files(String),
+    /// An input beyond a stated limit (see [`crate::limits`]), refused before it was
+    /// read or allocated.
+    #[error("{file}: {problem}")]
+    Limit {
+        /// The file (or view) refused.
+        file: String,
+        /// Which limit, the value and how to raise it.
+        problem: String,
+    },
 }
 
 /// Result with the crate's [`Error`](enum@Error).

@@ -63,6 +63,7 @@ mod window;
 
 pub mod app;
 pub mod io;
+pub mod limits;
 pub mod metrics;
 
 // Stage modules: public for the kernel tests and benchmarks, not part of the manual.
@@ -90,6 +91,7 @@ pub use estimator::{
     ViewResult, ALTERNATIVE_FACTOR, ALTERNATIVE_SLACK, OBJECT_MARGIN,
 };
 pub use io::scene::{load_scene, Scene, SceneJson, ViewJson};
+pub use limits::Limits;
 pub use loss::objective::ObjectiveSettings;
 pub use mask::Mask;
 pub use mesh::{Bounds, Mesh};

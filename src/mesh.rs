@@ -3,6 +3,9 @@
 
 use glam::DVec3;
 
+/// Smallest extent of a mesh (any unit): below it, squared distances underflow.
+pub const MIN_EXTENT: f64 = 1e-100;
+
 /// A triangle mesh, model frame, node transforms already applied.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Mesh {
@@ -149,11 +152,55 @@ impl Mesh {
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
             return Err(err(format!("vertex {i} has a non-finite coordinate")));
         }
+        let max = crate::limits::MAX_LENGTH;
+        if let Some(i) = self.positions.iter().position(|p| p.abs().max_element() > max) {
+            return Err(err(format!(
+                "vertex {i} has a coordinate beyond ±{max:e} ({:?}): the largest length accepted",
+                self.positions[i].to_array()
+            )));
+        }
         let n = self.positions.len() as u32;
         if let Some(t) = self.triangles.iter().find(|t| t.iter().any(|&i| i >= n)) {
             return Err(err(format!(
                 "triangle {t:?} refers to a vertex beyond the {n} vertices"
             )));
+        }
+        // The used vertices' extent, and the largest triangle's area against it.
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for t in &self.triangles {
+            for &i in t {
+                lo = lo.min(self.positions[i as usize]);
+                hi = hi.max(self.positions[i as usize]);
+            }
+        }
+        let extent = (hi - lo).max_element();
+        let magnitude = lo.abs().max(hi.abs()).max_element();
+        if !(extent > MIN_EXTENT && extent > 1e-12 * magnitude) {
+            return Err(err(format!(
+                "has no extent: its triangles' vertices all lie within {extent:e} of each other{}",
+                if magnitude > 0.0 {
+                    format!(" (at coordinates up to {magnitude:e})")
+                } else {
+                    String::new()
+                }
+            )));
+        }
+        // Areas relative to the extent: a collinear or zero-area mesh casts no silhouette.
+        let unit = 1.0 / extent;
+        let largest = self
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| (self.positions[i as usize] - lo) * unit);
+                (b - a).cross(c - a).length()
+            })
+            .fold(0.0f64, f64::max);
+        if largest <= 1e-12 {
+            return Err(err(
+                "has no area: every triangle is degenerate (collinear or repeated vertices), so it casts no silhouette"
+                    .into(),
+            ));
         }
         Ok(())
     }

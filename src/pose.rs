@@ -90,6 +90,24 @@ impl Pose {
                 self.scale.to_array()
             )));
         }
+        let (lo, hi) = crate::limits::SCALE_RANGE;
+        if self.scale.min_element() < lo || self.scale.max_element() > hi {
+            return Err(Error::Pose(format!(
+                "scale {:?} is outside the factors accepted ({lo:e} to {hi:e})",
+                self.scale.to_array()
+            )));
+        }
+        if let Some(p) = self
+            .translation
+            .to_array()
+            .into_iter()
+            .find_map(crate::limits::length_problem)
+        {
+            return Err(Error::Pose(format!(
+                "translation {:?}: {p}",
+                self.translation.to_array()
+            )));
+        }
         let e = so3::orthonormality_error(self.rotation);
         if e > 1e-3 {
             return Err(Error::Pose(format!("rotation is not orthonormal (error {e:.2e})")));
@@ -99,6 +117,7 @@ impl Pose {
 
     /// Parses the wire form (see [`PoseJson`]); `file` names the source in errors.
     pub fn from_json_str(text: &str, file: &str) -> Result<Pose> {
+        crate::limits::check_json_depth(file, text.as_bytes())?;
         let pj: PoseJson = serde_json::from_str(text).map_err(|e| Error::Json {
             file: file.into(),
             problem: e.to_string(),

@@ -221,6 +221,12 @@ impl PixelBox {
         if !b.iter().all(|v| v.is_finite()) {
             return bad("holds a number that is not finite".into());
         }
+        if let Some(v) = b.iter().find(|v| v.abs() > crate::limits::MAX_BOX_PX) {
+            return bad(format!(
+                "{v:e} lies beyond any image (box coordinates are pixels, at most ±{:e})",
+                crate::limits::MAX_BOX_PX
+            ));
+        }
         let [x0, y0, x1, y1] = b;
         if x1 <= x0 || y1 <= y0 {
             return bad(

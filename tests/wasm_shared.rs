@@ -42,6 +42,6 @@ fn khronos_meshes_load_alike_from_glb_gltf_and_buffers() {
     same_mesh(&box_glb, &box_gltf, 1e-12);
     // Through the binding: the .bin found by name in a FileSet.
     let mut extra = FileSet::new();
-    extra.add("Box0.bin", BOX_BIN.to_vec());
+    extra.add_bytes("Box0.bin", BOX_BIN.to_vec());
     assert_eq!(check_mesh("models/Box.gltf", BOX_GLTF, &extra).unwrap(), 12);
 }

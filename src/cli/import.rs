@@ -120,8 +120,9 @@ pub fn run(cmd: &ImportCommand) -> CliResult {
             let text = super::files::read_text(&path)?;
             let mesh_name = copy_mesh(&a.mesh, &a.out)?;
             let dir = a.dir.clone();
-            let imported = nerf::import(&name, &text, &|p| std::fs::read(dir.join(p)).ok(), &mesh_name)
-                .map_err(|e| format!("{}: {e}", a.dir.display()))?;
+            let disk = super::files::Disk::default();
+            let imported = nerf::import(&name, &text, &|p| disk.get(&dir.join(p)), &mesh_name)
+                .map_err(|e| format!("{}: {}", a.dir.display(), disk.explain(e)))?;
             finish(imported, &a.out)
         }
         ImportCommand::Bop(a) => {
@@ -146,8 +147,9 @@ pub fn run(cmd: &ImportCommand) -> CliResult {
                 MaskArg::Visib => MaskKind::Visible,
             };
             let dir = a.dataset.clone();
-            let imported = bop::import(&|p| std::fs::read(dir.join(p)).ok(), &o)
-                .map_err(|e| format!("{}: {e}", a.dataset.display()))?;
+            let disk = super::files::Disk::default();
+            let imported = bop::import(&|p| disk.get(&dir.join(p)), &o)
+                .map_err(|e| format!("{}: {}", a.dataset.display(), disk.explain(e)))?;
             finish(imported, &a.out)
         }
     }

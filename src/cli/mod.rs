@@ -21,6 +21,10 @@ use std::path::PathBuf;
 #[derive(Parser)]
 #[command(name = "localisebot", version, about, long_about = None)]
 struct Cli {
+    /// Raise or lower an input limit, NAME=VALUE (repeatable): file_bytes, view_pixels,
+    /// total_pixels, views, vertices, triangles (defaults in README, "Limits").
+    #[arg(long = "limit", global = true, value_name = "NAME=VALUE")]
+    limits: Vec<String>,
     #[command(subcommand)]
     command: Command,
 }
@@ -68,6 +72,10 @@ enum Command {
 /// Runs the command line; returns the process exit status.
 pub fn main() -> i32 {
     let cli = Cli::parse();
+    if let Err(e) = files::set_limits(&cli.limits) {
+        eprintln!("error: {e}");
+        return 2;
+    }
     let result = match cli.command {
         Command::Info { mesh } => info::run(&mesh).map(|_| 0),
         Command::Synth(args) => synth::run(&args).map(|_| 0),

@@ -175,6 +175,7 @@ fn parse<T: for<'de> Deserialize<'de>>(files: Resolver, path: &str, referrer: &s
         file: path.into(),
         referrer: referrer.into(),
     })?;
+    crate::limits::check_json_depth(path, &bytes)?;
     serde_json::from_slice(&bytes).map_err(|e| Error::Json {
         file: path.into(),
         problem: e.to_string(),

@@ -20,7 +20,8 @@
 use crate::error::{Error, Result};
 use crate::io::mask::decode_image;
 use crate::io::scene::{scene_from_parts, Scene, SceneJson};
-use crate::io::{join, load_mesh, parent_dir};
+use crate::io::{join, load_mesh_with, parent_dir};
+use crate::limits::Limits;
 use crate::mesh::Mesh;
 use serde_json::{json, Value};
 use std::cmp::Ordering;
@@ -40,6 +41,7 @@ pub enum FileRole {
 #[derive(Debug, Default, Clone)]
 pub struct FileSet {
     files: Vec<(String, Vec<u8>)>,
+    limits: Limits,
 }
 
 /// What [`FileSet::plan`] found the files to be.
@@ -89,13 +91,17 @@ pub fn is_mesh_file(path: &str) -> bool {
     MESH_EXTENSIONS.contains(&extension(path).as_str())
 }
 
-/// Whether an image's pixels are all pure black or pure white grey (a mask).
-fn black_and_white(bytes: &[u8]) -> bool {
-    decode_image(bytes, "", "").is_ok_and(|img| {
-        img.data
-            .chunks_exact(4)
-            .all(|p| p[0] == p[1] && p[1] == p[2] && (p[0] == 0 || p[0] == 255))
-    })
+/// Whether an image's pixels are all pure black or pure white grey (a mask). An
+/// image of more than `max_pixels` (by its header) is not decoded: it is not a mask
+/// this set could load.
+fn black_and_white(bytes: &[u8], max_pixels: u64) -> bool {
+    let small = crate::io::mask::dimensions(bytes).is_ok_and(|(w, h)| w as u64 * h as u64 <= max_pixels);
+    small
+        && decode_image(bytes, "", "").is_ok_and(|img| {
+            img.data
+                .chunks_exact(4)
+                .all(|p| p[0] == p[1] && p[1] == p[2] && (p[0] == 0 || p[0] == 255))
+        })
 }
 
 /// Compares names as people number things: `view2` before `view10`, case ignored.
@@ -211,6 +217,16 @@ impl FileSet {
         }
     }
 
+    /// The limits loads from this set are checked against (default [`Limits::DEFAULT`]).
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Sets the limits of later loads.
+    pub fn set_limits(&mut self, limits: Limits) {
+        self.limits = limits;
+    }
+
     /// The number of files.
     pub fn len(&self) -> usize {
         self.files.len()
@@ -236,7 +252,7 @@ impl FileSet {
                 .flatten()
                 .map(<[u8]>::to_vec)
         };
-        load_mesh(file_name, bytes, &resolve)
+        load_mesh_with(file_name, bytes, &resolve, &self.limits)
     }
 
     /// The file a scene asks for as `wanted`: the file of that exact path; else the
@@ -264,8 +280,14 @@ impl FileSet {
             }
             if hits.len() > 1 {
                 let keep: Vec<_> = match role {
-                    FileRole::Mask => hits.iter().filter(|f| black_and_white(&f.1)).collect(),
-                    FileRole::Image => hits.iter().filter(|f| !black_and_white(&f.1)).collect(),
+                    FileRole::Mask => hits
+                        .iter()
+                        .filter(|f| black_and_white(&f.1, self.limits.view_pixels))
+                        .collect(),
+                    FileRole::Image => hits
+                        .iter()
+                        .filter(|f| !black_and_white(&f.1, self.limits.view_pixels))
+                        .collect(),
                     FileRole::Other => vec![],
                 };
                 if keep.len() == 1 {
@@ -297,7 +319,9 @@ impl FileSet {
                     file: path.clone(),
                     problem,
                 };
+                self.limits.check_file(path, bytes.len() as u64)?;
                 let text = std::str::from_utf8(bytes).map_err(|_| bad("not UTF-8 text".into()))?;
+                crate::limits::check_json_depth(path, bytes)?;
                 let value: Value = serde_json::from_str(text).map_err(|e| bad(format!("not valid JSON ({e})")))?;
                 let file = JsonFile { path, text, value };
                 let v = &file.value;
@@ -428,7 +452,9 @@ impl FileSet {
     /// [`find`](Self::find), as a mask or an image), and warnings: an image not in
     /// the set (or only as the view's mask) is left out, for images are only shown.
     pub fn load_scene(&self, scene_file: &str, text: &str) -> Result<(Scene, Vec<String>)> {
+        self.limits.check_file(scene_file, text.len() as u64)?;
         let mut json = SceneJson::parse(text, scene_file)?;
+        self.limits.check_views(scene_file, json.views.len() as u64)?;
         let dir = parent_dir(scene_file);
         let missing = |path: String| Error::MissingFile {
             file: path,
@@ -504,7 +530,7 @@ impl FileSet {
             let bytes = found.iter().find(|(p, _)| p == rel).map(|(_, b)| b.to_vec());
             bytes.ok_or_else(|| missing(join(dir, rel)))
         };
-        let scene = scene_from_parts(scene_file, json, mesh, &fetch)?;
+        let scene = scene_from_parts(scene_file, json, mesh, &fetch, &self.limits)?;
         warnings.extend(scene.warnings.iter().cloned());
         Ok((scene, warnings))
     }

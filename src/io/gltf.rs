@@ -17,6 +17,7 @@
 
 use crate::error::{Error, Result};
 use crate::io::Resolver;
+use crate::limits::Limits;
 use crate::mesh::Mesh;
 use base64::Engine;
 use glam::{DMat4, DQuat, DVec3};
@@ -44,6 +45,12 @@ const HARMLESS_EXTENSIONS: &[&str] = &[
 /// mesh file. A missing external buffer gives [`Error::MissingFile`], everything else
 /// that is wrong [`Error::Mesh`].
 pub fn load(file: &str, bytes: &[u8], extra: Resolver) -> Result<Mesh> {
+    load_with(file, bytes, extra, &Limits::DEFAULT)
+}
+
+/// As [`load`], the vertex and triangle counts the document declares (over every
+/// instance of every mesh) checked against `limits` before any buffer is read.
+pub fn load_with(file: &str, bytes: &[u8], extra: Resolver, limits: &Limits) -> Result<Mesh> {
     let err = |problem: String| Error::Mesh {
         file: file.into(),
         problem,
@@ -53,10 +60,24 @@ pub fn load(file: &str, bytes: &[u8], extra: Resolver) -> Result<Mesh> {
     } else {
         (bytes.to_vec(), None)
     };
+    crate::limits::check_json_depth(file, &json)?;
     let root = parse_root(&json).map_err(err)?;
     validate(&root).map_err(err)?;
     let doc = gltf::Document::from_json_without_validation(root);
     let instances = instances(&doc).map_err(err)?;
+    let (mut vertices, mut triangles) = (0u64, 0u64);
+    for (gmesh, _) in &instances {
+        for prim in gmesh.primitives().filter(|p| is_triangles(p.mode())) {
+            let n = prim.get(&gltf::Semantic::Positions).map_or(0, |a| a.count() as u64);
+            let corners = prim.indices().map_or(n, |a| a.count() as u64);
+            vertices += n;
+            triangles += match prim.mode() {
+                Mode::Triangles => corners / 3,
+                _ => corners.saturating_sub(2),
+            };
+        }
+    }
+    limits.check_mesh(file, vertices, triangles)?;
     let buffers = load_buffers(file, &doc, blob, extra, &instances)?;
     let mut mesh = Mesh::default();
     for (gmesh, world) in &instances {

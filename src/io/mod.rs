@@ -16,6 +16,7 @@ pub mod png;
 pub mod scene;
 
 use crate::error::{Error, Result};
+use crate::limits::Limits;
 use crate::mesh::Mesh;
 
 /// A resolver: the bytes of a file named relative to the referring file, if supplied.
@@ -65,17 +66,24 @@ pub fn join(dir: &str, rel: &str) -> String {
 /// magic) or extension (`.obj`, `.ply`). `extra` supplies files the mesh refers to (a `.gltf`'s `.bin`
 /// buffers), by URI relative to the mesh file.
 pub fn load_mesh(file: &str, bytes: &[u8], extra: Resolver) -> Result<Mesh> {
+    load_mesh_with(file, bytes, extra, &Limits::DEFAULT)
+}
+
+/// As [`load_mesh`], the file's size and declared counts checked against `limits`
+/// before anything is allocated for them.
+pub fn load_mesh_with(file: &str, bytes: &[u8], extra: Resolver, limits: &Limits) -> Result<Mesh> {
+    limits.check_file(file, bytes.len() as u64)?;
     let lower = file.to_ascii_lowercase();
     let mesh = if bytes.starts_with(b"glTF") || lower.ends_with(".glb") || lower.ends_with(".gltf") {
-        gltf::load(file, bytes, extra)?
+        gltf::load_with(file, bytes, extra, limits)?
     } else if lower.ends_with(".obj") {
-        obj::load(file, bytes)?
+        obj::load_with(file, bytes, limits)?
     } else if lower.ends_with(".ply") || bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
-        ply::load(file, bytes)?
+        ply::load_with(file, bytes, limits)?
     } else {
         let head = bytes.iter().find(|b| !b.is_ascii_whitespace());
         if head == Some(&b'{') {
-            gltf::load(file, bytes, extra)?
+            gltf::load_with(file, bytes, extra, limits)?
         } else {
             return Err(Error::Mesh {
                 file: file.into(),

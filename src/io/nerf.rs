@@ -113,6 +113,7 @@ pub fn import(transforms_file: &str, text: &str, files: Resolver, mesh_file: &st
         file: transforms_file.into(),
         problem,
     };
+    crate::limits::check_json_depth(transforms_file, text.as_bytes())?;
     let t: Transforms = serde_json::from_str(text).map_err(|e| json_err(e.to_string()))?;
     let dir = parent_dir(transforms_file);
     let mut out = Imported {

@@ -12,10 +12,11 @@
 //! instead of its per-element hash maps.
 
 use crate::error::{Error, Result};
+use crate::limits::Limits;
 use crate::mesh::Mesh;
 use glam::DVec3;
 use ply_rs_bw::parser::{Parser, Reader};
-use ply_rs_bw::ply::{Property, PropertyAccess, PropertyAccessResult, PropertyType};
+use ply_rs_bw::ply::{ElementDef, Encoding, Property, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType};
 
 /// The names a face's vertex list goes by.
 const FACE_LISTS: [&str; 2] = ["vertex_indices", "vertex_index"];
@@ -84,8 +85,35 @@ impl PropertyAccess for Element {
     }
 }
 
-/// Loads a PLY mesh; `file` names it in errors.
+fn scalar_bytes(t: &ScalarType) -> u64 {
+    match t {
+        ScalarType::Char | ScalarType::UChar => 1,
+        ScalarType::Short | ScalarType::UShort => 2,
+        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+        ScalarType::Double => 8,
+    }
+}
+
+/// The fewest bytes one element can take: binary, each scalar's size (a list, its
+/// count's); ASCII, a digit and a separator per property.
+fn min_record_bytes(e: &ElementDef, encoding: &Encoding) -> u64 {
+    e.properties
+        .values()
+        .map(|p| match (encoding, &p.data_type) {
+            (Encoding::Ascii, _) => 2,
+            (_, PropertyType::Scalar(t)) | (_, PropertyType::List(t, _)) => scalar_bytes(t),
+        })
+        .sum()
+}
+
+/// Loads a PLY mesh with the default [`Limits`]; `file` names it in errors.
 pub fn load(file: &str, bytes: &[u8]) -> Result<Mesh> {
+    load_with(file, bytes, &Limits::DEFAULT)
+}
+
+/// Loads a PLY mesh; its declared vertex and face counts are checked against `limits`
+/// and against the bytes that follow the header before the data is read.
+pub fn load_with(file: &str, bytes: &[u8], limits: &Limits) -> Result<Mesh> {
     let err = |problem: String| Error::Mesh {
         file: file.into(),
         problem,
@@ -122,6 +150,17 @@ pub fn load(file: &str, bytes: &[u8]) -> Result<Mesh> {
     {
         return Err(err(format!("element '{}' has no properties", e.name)));
     }
+    limits.check_mesh(file, vertex.count as u64, face.count as u64)?;
+    let left = (bytes.len() as u64).saturating_sub(reader.get_ref().position());
+    for e in header.elements.values() {
+        let need = (e.count as u64).saturating_mul(min_record_bytes(e, &header.encoding));
+        if need > left {
+            return Err(err(format!(
+                "declares {} '{}' elements, which need at least {need} bytes, but {left} bytes follow the header",
+                e.count, e.name
+            )));
+        }
+    }
     let mut payload = parser
         .read_payload(&mut reader, &header)
         .map_err(|e| err(format!("cannot read the PLY data: {e}")))?;
@@ -140,6 +179,10 @@ pub fn load(file: &str, bytes: &[u8]) -> Result<Mesh> {
             )));
         }
         // Fewer than three vertices make no area: nothing to draw.
+        let fan = ix.len().saturating_sub(2);
+        if (mesh.triangles.len() + fan) as u64 > limits.triangles {
+            limits.check_mesh(file, 0, (mesh.triangles.len() + fan) as u64)?;
+        }
         for k in 2..ix.len() {
             mesh.triangles.push([ix[0] as u32, ix[k - 1] as u32, ix[k] as u32]);
         }
@@ -285,9 +328,14 @@ mod tests {
         let a = ascii();
         expect(&a[..a.len() - 12], "PLY data");
         let b = binary(false);
-        for cut in [b.len() - 1, b.len() - 30, header("binary_little_endian").len() + 5] {
+        for cut in [b.len() - 1, b.len() - 30] {
             expect(&b[..cut], "PLY data");
         }
+        // Too few bytes for the declared counts: refused before the data is read.
+        expect(
+            &b[..header("binary_little_endian").len() + 5],
+            "need at least 136 bytes, but 5 bytes follow the header",
+        );
         let out_of_range = String::from_utf8(ascii()).unwrap().replace("4 4 5 6 7", "4 4 5 6 8");
         expect(out_of_range.as_bytes(), "refers to vertex 8");
         let words = String::from_utf8(ascii()).unwrap().replace("0.5 200\n", "0.5 zz\n");

@@ -5,7 +5,8 @@
 use crate::camera::CameraJson;
 use crate::error::{Error, Result};
 use crate::io::mask::{decode_image_sized, decode_mask_sized};
-use crate::io::{join, load_mesh, parent_dir, Resolver};
+use crate::io::{join, load_mesh_with, parent_dir, Resolver};
+use crate::limits::Limits;
 use crate::mesh::Mesh;
 use crate::pose::{Pose, PoseJson};
 use crate::view::{PhotoView, PixelBox, View, ViewSources};
@@ -106,6 +107,7 @@ impl Scene {
 impl SceneJson {
     /// Parses scene JSON text; `file` names it in errors.
     pub fn parse(text: &str, file: &str) -> Result<SceneJson> {
+        crate::limits::check_json_depth(file, text.as_bytes())?;
         let s: SceneJson = serde_json::from_str(text).map_err(|e| Error::Json {
             file: file.into(),
             problem: e.to_string(),
@@ -128,7 +130,15 @@ impl SceneJson {
 /// Loads a scene: parses `text` (the file `scene_file`), fetches every file it names
 /// through `files` (paths joined onto the scene file's folder) and validates it all.
 pub fn load_scene(scene_file: &str, text: &str, files: Resolver) -> Result<Scene> {
+    load_scene_with(scene_file, text, files, &Limits::DEFAULT)
+}
+
+/// As [`load_scene`], every size checked against `limits` (the views, their pixels,
+/// the mesh's counts, each file's bytes) before it is decoded.
+pub fn load_scene_with(scene_file: &str, text: &str, files: Resolver, limits: &Limits) -> Result<Scene> {
+    limits.check_file(scene_file, text.len() as u64)?;
     let json = SceneJson::parse(text, scene_file)?;
+    limits.check_views(scene_file, json.views.len() as u64)?;
     let dir = parent_dir(scene_file);
     let fetch = |rel: &str, referrer: &str| -> Result<Vec<u8>> {
         files(&join(dir, rel)).ok_or_else(|| Error::MissingFile {
@@ -139,8 +149,8 @@ pub fn load_scene(scene_file: &str, text: &str, files: Resolver) -> Result<Scene
     let mesh_bytes = fetch(&json.mesh, scene_file)?;
     let mesh_path = join(dir, &json.mesh);
     let mesh_dir = parent_dir(&mesh_path).to_string();
-    let mesh = load_mesh(&mesh_path, &mesh_bytes, &|uri| files(&join(&mesh_dir, uri)))?;
-    scene_from_parts(scene_file, json, mesh, &|rel| fetch(rel, scene_file))
+    let mesh = load_mesh_with(&mesh_path, &mesh_bytes, &|uri| files(&join(&mesh_dir, uri)), limits)?;
+    scene_from_parts(scene_file, json, mesh, &|rel| fetch(rel, scene_file), limits)
 }
 
 /// Builds a scene from its parsed JSON and an already loaded mesh; `fetch` supplies
@@ -150,6 +160,7 @@ pub fn scene_from_parts(
     json: SceneJson,
     mesh: Mesh,
     fetch: &dyn Fn(&str) -> Result<Vec<u8>>,
+    limits: &Limits,
 ) -> Result<Scene> {
     if json.views.is_empty() {
         return Err(Error::Json {
@@ -157,6 +168,18 @@ pub fn scene_from_parts(
             problem: "the scene has no views".into(),
         });
     }
+    limits.check_views(scene_file, json.views.len() as u64)?;
+    // Every camera's pixels, before any mask or image is fetched or decoded.
+    let mut total = 0u64;
+    for vj in &json.views {
+        total += vj.camera.width as u64 * vj.camera.height as u64;
+        limits.check_pixels(&vj.name, vj.camera.width, vj.camera.height, total)?;
+    }
+    let fetch = |rel: &str| -> Result<Vec<u8>> {
+        let bytes = fetch(rel)?;
+        limits.check_file(rel, bytes.len() as u64)?;
+        Ok(bytes)
+    };
     let mut views = Vec::with_capacity(json.views.len());
     let mut photos = Vec::new();
     let mut warnings = Vec::new();

@@ -6,6 +6,7 @@ use super::{json_text, FileSet, Session};
 use crate::camera::{Camera, CameraJson};
 use crate::error::{Error, Result};
 use crate::io::mask::{decode_image_sized, decode_mask_sized, mask_from_rgba};
+use crate::limits::Limits;
 use crate::mask::Mask;
 use crate::mesh::Mesh;
 use crate::pose::{Pose, PoseJson};
@@ -17,6 +18,7 @@ use wasm_bindgen::prelude::*;
 #[wasm_bindgen]
 #[derive(Default)]
 pub struct SessionBuilder {
+    limits: Limits,
     mesh: Option<Mesh>,
     views: Vec<View>,
     initial_pose: Option<Pose>,
@@ -72,7 +74,16 @@ impl SessionBuilder {
     /// Sets the mesh from its file's bytes (`.glb`, `.gltf`, `.obj`); `extra` holds
     /// the files a `.gltf` refers to (its `.bin` buffers), by name.
     pub fn mesh(&mut self, file_name: &str, bytes: &[u8], extra: Option<FileSet>) -> Result<(), JsError> {
-        self.mesh = Some(extra.unwrap_or_default().load_mesh(file_name, bytes)?);
+        let mut extra = extra.unwrap_or_default();
+        extra.set_limits(self.limits);
+        self.mesh = Some(extra.load_mesh(file_name, bytes)?);
+        Ok(())
+    }
+
+    /// Sets an input limit of the later calls (as `FileSet.setLimit`).
+    #[wasm_bindgen(js_name = setLimit)]
+    pub fn set_limit(&mut self, name: &str, value: f64) -> Result<(), JsError> {
+        self.limits.set(name, super::files::whole(name, value)?)?;
         Ok(())
     }
 
@@ -87,6 +98,7 @@ impl SessionBuilder {
         image_png: Option<Vec<u8>>,
     ) -> Result<(), JsError> {
         let camera = parse_camera(name, &camera)?;
+        self.check_pixels(name, &camera)?;
         let (w, h) = (camera.width, camera.height);
         let mask = decode_mask_sized(mask_png, name, "mask PNG", w, h)?;
         let image = image_png
@@ -116,6 +128,7 @@ impl SessionBuilder {
         image_rgba: Option<Vec<u8>>,
     ) -> Result<(), JsError> {
         let camera = parse_camera(name, &camera)?;
+        self.check_pixels(name, &camera)?;
         let mask = mask_from_rgba(&rgba(name, "mask", width, height, mask_rgba)?);
         let image = image_rgba.map(|d| rgba(name, "image", width, height, d)).transpose()?;
         self.push_view(
@@ -158,6 +171,19 @@ impl SessionBuilder {
 }
 
 impl SessionBuilder {
+    /// The view count and pixels with `camera`'s, against the limits, before its
+    /// mask or image is decoded.
+    fn check_pixels(&self, name: &str, camera: &Camera) -> Result<()> {
+        self.limits.check_views(name, self.views.len() as u64 + 1)?;
+        let total: u64 = self
+            .views
+            .iter()
+            .map(|v| v.camera().width as u64 * v.camera().height as u64)
+            .sum::<u64>()
+            + camera.width as u64 * camera.height as u64;
+        self.limits.check_pixels(name, camera.width, camera.height, total)
+    }
+
     fn push_view(
         &mut self,
         name: &str,

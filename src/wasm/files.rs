@@ -25,9 +25,41 @@ impl FileSet {
 
     /// Adds a file. Several files may share a path (a file chooser gives bare names,
     /// so `images/a.png` and `masks/a.png` both arrive as `a.png`); an exact duplicate
-    /// (same path, same bytes) is ignored.
-    pub fn add(&mut self, path: &str, bytes: Vec<u8>) {
-        self.0.add(path, bytes);
+    /// (same path, same bytes) is ignored. A file over the `file_bytes` limit is
+    /// refused before it is copied into the module's memory.
+    pub fn add(&mut self, path: &str, bytes: &js_sys::Uint8Array) -> Result<(), JsError> {
+        self.0.limits().check_file(path, bytes.length() as u64)?;
+        self.0.add(path, bytes.to_vec());
+        Ok(())
+    }
+
+    /// Sets an input limit of this set's loads (see README, "Limits"): `file_bytes`,
+    /// `view_pixels`, `total_pixels`, `views`, `vertices` or `triangles`; a whole
+    /// number of at least 1.
+    #[wasm_bindgen(js_name = setLimit)]
+    pub fn set_limit(&mut self, name: &str, value: f64) -> Result<(), JsError> {
+        let mut l = *self.0.limits();
+        l.set(name, whole(name, value)?)?;
+        self.0.set_limits(l);
+        Ok(())
+    }
+
+    /// The limits as an object of numbers, keyed as `setLimit` names them.
+    #[wasm_bindgen(getter)]
+    pub fn limits(&self) -> JsValue {
+        let l = self.0.limits();
+        let o = js_sys::Object::new();
+        for (name, v) in [
+            ("file_bytes", l.file_bytes),
+            ("view_pixels", l.view_pixels),
+            ("total_pixels", l.total_pixels),
+            ("views", l.views),
+            ("vertices", l.vertices),
+            ("triangles", l.triangles),
+        ] {
+            let _ = js_sys::Reflect::set(&o, &name.into(), &(v as f64).into());
+        }
+        o.into()
     }
 
     /// The number of files.
@@ -42,7 +74,27 @@ impl FileSet {
     }
 }
 
+/// A limit's value from JavaScript: a whole number from 1 to 2⁵³.
+pub(crate) fn whole(name: &str, value: f64) -> Result<u64, JsError> {
+    if value.fract() != 0.0 || !(1.0..=9_007_199_254_740_992.0).contains(&value) {
+        return Err(JsError::new(&format!(
+            "limit {name}: {value} is not a whole number from 1 to 2^53"
+        )));
+    }
+    Ok(value as u64)
+}
+
 impl FileSet {
+    /// Adds a file's bytes (for Rust callers; JavaScript calls [`FileSet::add`]).
+    pub fn add_bytes(&mut self, path: &str, bytes: Vec<u8>) {
+        self.0.add(path, bytes);
+    }
+
+    /// Sets the limits of later loads.
+    pub fn set_limits(&mut self, limits: crate::limits::Limits) {
+        self.0.set_limits(limits);
+    }
+
     /// The core file set.
     pub fn inner(&self) -> &fileset::FileSet {
         &self.0

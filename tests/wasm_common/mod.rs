@@ -111,7 +111,7 @@ fn file_set(files: &[(String, Vec<u8>)], flat: bool) -> FileSet {
     let mut set = FileSet::new();
     for (path, bytes) in files {
         let name = if flat { path.rsplit('/').next().unwrap() } else { path };
-        set.add(name, bytes.clone());
+        set.add_bytes(name, bytes.clone());
     }
     set
 }
@@ -162,7 +162,7 @@ fn meshes_load_alike_from_glb_gltf_with_its_bin_and_ply() {
     same_mesh(&toy, &from_ply, 1e-12);
     // Through the binding: the .bin found by name in a FileSet; its absence named.
     let mut extra = FileSet::new();
-    extra.add("toy.bin", bin.clone());
+    extra.add_bytes("toy.bin", bin.clone());
     assert_eq!(
         check_mesh("models/toy.gltf", gltf.as_bytes(), &extra).unwrap(),
         toy.triangles.len()
@@ -281,15 +281,15 @@ fn dropped_files_make_a_session_whatever_they_are() {
     // One camera JSON per view, with a mask and an image both named viewN.png.
     let scene: serde_json::Value = serde_json::from_str(&text(&ex, "example/scene.json")).unwrap();
     let mut set = FileSet::new();
-    set.add("toy.glb", bytes(&ex, "example/toy.glb").to_vec());
+    set.add_bytes("toy.glb", bytes(&ex, "example/toy.glb").to_vec());
     for v in scene["views"].as_array().unwrap() {
         let name = v["name"].as_str().unwrap();
-        set.add(&format!("{name}.json"), v["camera"].to_string().into_bytes());
-        set.add(
+        set.add_bytes(&format!("{name}.json"), v["camera"].to_string().into_bytes());
+        set.add_bytes(
             &format!("{name}.png"),
             bytes(&ex, &format!("example/images/{name}.png")).to_vec(),
         );
-        set.add(
+        set.add_bytes(
             &format!("{name}.png"),
             bytes(&ex, &format!("example/masks/{name}.png")).to_vec(),
         );
@@ -305,7 +305,7 @@ fn dropped_files_make_a_session_whatever_they_are() {
     }
     // A mesh alone: checked, then reported as lacking a scene.
     let mut mesh_only = FileSet::new();
-    mesh_only.add("toy.glb", bytes(&ex, "example/toy.glb").to_vec());
+    mesh_only.add_bytes("toy.glb", bytes(&ex, "example/toy.glb").to_vec());
     let msg = js_message(Session::from_files(&mesh_only).err().unwrap());
     assert!(
         msg.starts_with("toy.glb: a valid mesh (") && msg.contains("no scene"),
@@ -316,11 +316,38 @@ fn dropped_files_make_a_session_whatever_they_are() {
 }
 
 #[wasm_bindgen_test]
+fn limits_are_enforced_in_the_module_before_copying_or_decoding() {
+    let ex = toy_example();
+    // A file over file_bytes is refused before it is copied in.
+    let mut set = FileSet::new();
+    set.set_limit("file_bytes", 1000.0).unwrap();
+    let big = js_sys::Uint8Array::new_with_length(1001);
+    let msg = js_message(set.add("big.glb", &big).err().unwrap());
+    assert!(msg.contains("big.glb") && msg.contains("--limit file_bytes=N"), "{msg}");
+    assert_eq!(set.length(), 0);
+    set.add("small.bin", &js_sys::Uint8Array::new_with_length(1000))
+        .unwrap();
+    assert!(set.set_limit("pixels", 5.0).is_err() && set.set_limit("views", 0.5).is_err());
+    // The toy scene with a triangle limit below its mesh's, then a pixel limit below a view's.
+    for (name, value, says) in [
+        ("triangles", 10.0, "triangles"),
+        ("view_pixels", 100.0, "view_pixels"),
+        ("total_pixels", 60_000.0, "total_pixels"),
+        ("views", 2.0, "views"),
+    ] {
+        let mut s = file_set(&ex, false);
+        s.set_limit(name, value).unwrap();
+        let msg = js_message(Session::from_files(&s).err().unwrap());
+        assert!(msg.contains(says) && msg.contains("exceeds the limit"), "{name}: {msg}");
+    }
+}
+
+#[wasm_bindgen_test]
 fn errors_reach_javascript_as_error_objects_with_specific_messages() {
     let ex = toy_example();
     let scene = text(&ex, "example/scene.json");
     let mut broken = file_set(&ex, false);
-    broken.add("example/toy.glb", b"glTF\x02\x00\x00\x00garbage".to_vec());
+    broken.add_bytes("example/toy.glb", b"glTF\x02\x00\x00\x00garbage".to_vec());
     let msg = js_message(
         Session::from_scene("example/scene.json", &scene, &broken)
             .err()
