@@ -62,7 +62,7 @@ pub enum Plan {
     },
 }
 
-/// The mesh file types [`load_mesh`] reads, by extension.
+/// The mesh file types [`FileSet::load_mesh`] reads, by extension.
 pub const MESH_EXTENSIONS: [&str; 4] = ["glb", "gltf", "obj", "ply"];
 
 /// A path with `\` as `/`, `.` and `..` resolved, no leading `/`.
