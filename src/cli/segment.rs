@@ -39,7 +39,7 @@ pub fn run(a: &SegmentArgs) -> CliResult {
             a.scene.display()
         ));
     }
-    let (photo, _) = fit_photographs(&a.scene, scene, settings, a.models.as_deref())?;
+    let (photo, est, _) = fit_photographs(&a.scene, scene, settings, a.models.as_deref())?;
     let dir = a.scene.parent().unwrap_or(Path::new("."));
     let absolute = |rel: &str| -> String {
         let p = dir.join(rel);
@@ -62,7 +62,7 @@ pub fn run(a: &SegmentArgs) -> CliResult {
         v.ignore = v.ignore.as_deref().map(absolute);
     }
     wire.mesh = absolute(&wire.mesh);
-    let reports = photo.reports();
+    let reports = photo.reports(Some(&est.pose()));
     write(&a.out.join("scene.json"), to_json(&wire).as_bytes())?;
     for r in &reports {
         eprintln!(

@@ -5,7 +5,7 @@
 use super::files::CliResult;
 use localisebot::segment::sam::{SamSegmenter, DECODER_FILE, ENCODER_FILE, PACKAGE};
 use localisebot::segment::{self, PhotoFit, PhotoSettings};
-use localisebot::{FitSettings, Scene};
+use localisebot::{Estimator, FitSettings, Scene};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -40,30 +40,32 @@ pub fn load(dir: &Path) -> CliResult<SamSegmenter> {
 }
 
 /// Makes the masks `scene` lacks and fits, round by round (`localisebot::segment`),
-/// printing each round; returns the finished rounds and the images encoded.
+/// printing each round; returns the finished rounds, the last fit and the images
+/// encoded.
 pub fn fit_photographs(
     path: &Path,
     scene: Scene,
     settings: FitSettings,
     models: Option<&Path>,
-) -> CliResult<(PhotoFit, usize)> {
+) -> CliResult<(PhotoFit, Estimator, usize)> {
     let fail = |e: localisebot::Error| format!("{}: {e}", path.display());
     let mut segmenter = load(&models_dir(models))?;
     let mut photo = PhotoFit::new(scene, settings, PhotoSettings::default()).map_err(fail)?;
     let mut last = Instant::now();
-    segment::run(&mut photo, &mut segmenter, |p| {
+    let est = segment::run(&mut photo, &mut segmenter, |p, e| {
         let now = Instant::now();
         let dt = (now - last).as_secs_f64();
         last = now;
-        match p.estimator() {
-            Some(e) if e.is_done() => eprintln!(
+        if e.is_done() {
+            eprintln!(
                 "  round {}: fit {} in {dt:.2} s",
                 p.rounds(),
                 e.judgement().map_or("?", |j| j.verdict.as_str())
-            ),
-            _ => eprintln!("  round {}: masks made in {dt:.2} s", p.rounds()),
+            );
+        } else {
+            eprintln!("  round {}: masks made in {dt:.2} s", p.rounds());
         }
     })
     .map_err(fail)?;
-    Ok((photo, segmenter.encoded))
+    Ok((photo, est, segmenter.encoded))
 }

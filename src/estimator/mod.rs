@@ -80,6 +80,26 @@ impl Estimator {
     /// Errors: invalid settings or mesh, no views, or an object whose centre is
     /// behind a camera at the initial pose.
     pub fn new(mesh: Mesh, views: Vec<View>, initial_pose: Option<Pose>, settings: FitSettings) -> Result<Estimator> {
+        Estimator::from_starts(mesh, views, initial_pose.into_iter().collect(), settings)
+    }
+
+    /// Sets up a fit of `mesh` to `views` whose search also scores the rotations of
+    /// `seeds` (e.g. an earlier fit's pose and its alternatives) beside its own sampling:
+    /// the fit can keep what an earlier one found and still find better.
+    ///
+    /// Errors: as [`Estimator::new`].
+    pub fn with_seeds(mesh: Mesh, views: Vec<View>, seeds: &[Pose], settings: FitSettings) -> Result<Estimator> {
+        let mut est = Estimator::from_starts(mesh, views, Vec::new(), settings)?;
+        est.setup.rotations.extend(seeds.iter().map(|p| p.rotation));
+        Ok(est)
+    }
+
+    /// Sets up a fit of `mesh` to `views` that refines every pose of `starts` (e.g. an
+    /// earlier fit's pose and its alternatives), each a candidate as the search's best
+    /// would be; with no start, the search runs as in [`Estimator::new`].
+    ///
+    /// Errors: as [`Estimator::new`], for every start.
+    pub fn from_starts(mesh: Mesh, views: Vec<View>, starts: Vec<Pose>, settings: FitSettings) -> Result<Estimator> {
         let setup = FitSetup::new(mesh, views, settings)?;
         let mut est = Estimator {
             local: Worker::new((0..setup.views.len()).collect()),
@@ -91,15 +111,17 @@ impl Estimator {
             iterations: 0,
             last_loss: f64::NAN,
             input_views: None,
-            searching: initial_pose.is_none(),
+            searching: starts.is_empty(),
         };
-        match initial_pose {
-            Some(p) => {
-                p.validate()?;
-                est.check_in_front(&p)?;
-                est.begin_refine(vec![p], None)?;
+        match starts.is_empty() {
+            false => {
+                for p in &starts {
+                    p.validate()?;
+                    est.check_in_front(p)?;
+                }
+                est.begin_refine(starts, None)?;
             }
-            None => {
+            true => {
                 let start = est.initial_guess()?;
                 est.local.search_objective(&est.setup)?;
                 est.state = State::Search {

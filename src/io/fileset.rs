@@ -390,17 +390,38 @@ impl FileSet {
                     .get("name")
                     .and_then(Value::as_str)
                     .map_or_else(|| stem(path).to_string(), str::to_string);
-                let (found_mask, found_image) = match_view(&name, &pngs);
+                let (mut found_mask, mut found_image) = match_view(&name, &pngs);
+                // A lone `NAME.png` that is not black and white is the view's photograph.
+                if let (Some(m), None) = (&found_mask, &found_image) {
+                    let photo = self
+                        .files
+                        .iter()
+                        .any(|(p, b)| p == m && !black_and_white(b, self.limits.view_pixels));
+                    if photo {
+                        found_image = found_mask.take();
+                    }
+                }
                 let given = |k: &str| value.get(k).and_then(Value::as_str).map(str::to_string);
-                let mask = given("mask").or(found_mask).ok_or_else(|| {
-                    files(format!(
-                        "view '{name}' ({path}): no mask: add {name}.png or masks/{name}.png"
-                    ))
-                })?;
+                let mask = given("mask").or(found_mask);
+                let image = given("image").or(found_image);
+                if mask.is_none() && image.is_none() {
+                    return Err(files(format!(
+                        "view '{name}' ({path}): no mask and no photograph: add {name}.png (a mask or the \
+                         photograph), masks/{name}.png or images/{name}.png"
+                    )));
+                }
                 let camera = value.get("camera").filter(|c| !c.is_null()).unwrap_or(value);
-                let mut view = json!({ "name": name, "mask": mask, "camera": camera });
-                if let Some(image) = given("image").or(found_image) {
+                let mut view = json!({ "name": name, "camera": camera });
+                if let Some(mask) = mask {
+                    view["mask"] = Value::from(mask);
+                }
+                if let Some(image) = image {
                     view["image"] = Value::from(image);
+                }
+                for key in ["box", "ignore"] {
+                    if let Some(v) = value.get(key).filter(|v| !v.is_null()) {
+                        view[key] = v.clone();
+                    }
                 }
                 views.push(view);
             }
@@ -419,6 +440,18 @@ impl FileSet {
              with the mesh, masks and images",
             self.names().join(", ")
         )))
+    }
+
+    /// Whether the scene the files make has views without a mask (photographs to
+    /// segment), by its JSON alone: nothing is decoded. `false` when the files make no
+    /// scene (loading them says why).
+    pub fn needs_segmenter(&self) -> bool {
+        match self.plan() {
+            Ok(Plan::Scene { file, text }) => {
+                SceneJson::parse(&text, &file).is_ok_and(|s| s.views.iter().any(|v| v.mask.is_none()))
+            }
+            _ => false,
+        }
     }
 
     /// The scene the files make ([`plan`](Self::plan), then [`load_scene`](Self::load_scene)),
@@ -834,7 +867,8 @@ mod tests {
         no_mask.add("left.json", camera);
         assert_eq!(
             message(no_mask.plan()),
-            "view 'left' (left.json): no mask: add left.png or masks/left.png"
+            "view 'left' (left.json): no mask and no photograph: add left.png (a mask or the photograph), \
+             masks/left.png or images/left.png"
         );
         let mut scenes = folder(&p, "a");
         scenes.add("b/scene.json", p.scene.clone().into_bytes());

@@ -87,6 +87,26 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Checks that a view with neither a box nor a mask can be placed: its box comes
+    /// from the geometry of at least two other views with one. ([`load_scene`] checks
+    /// it; a page where boxes are still to be drawn loads first and checks when the
+    /// fit starts.)
+    ///
+    /// Errors: naming the first such view.
+    pub fn check_hints(&self) -> Result<()> {
+        let hinted = self.views.len() + self.photos.iter().filter(|p| p.hint.is_some()).count();
+        match self.photos.iter().find(|p| p.hint.is_none()) {
+            Some(p) if hinted < 2 => Err(Error::View {
+                view: p.name.clone(),
+                problem: format!(
+                    "has neither a mask nor a box, and its box can only come from the geometry of at least two \
+                     other views with a box or a mask (the scene has {hinted})"
+                ),
+            }),
+            _ => Ok(()),
+        }
+    }
+
     /// An error naming the first view whose mask is still to be made (for what needs
     /// every view's mask: `what` says who asks).
     pub fn require_masks(&self, what: &str) -> Result<()> {
@@ -150,7 +170,9 @@ pub fn load_scene_with(scene_file: &str, text: &str, files: Resolver, limits: &L
     let mesh_path = join(dir, &json.mesh);
     let mesh_dir = parent_dir(&mesh_path).to_string();
     let mesh = load_mesh_with(&mesh_path, &mesh_bytes, &|uri| files(&join(&mesh_dir, uri)), limits)?;
-    scene_from_parts(scene_file, json, mesh, &|rel| fetch(rel, scene_file), limits)
+    let scene = scene_from_parts(scene_file, json, mesh, &|rel| fetch(rel, scene_file), limits)?;
+    scene.check_hints()?;
+    Ok(scene)
 }
 
 /// Builds a scene from its parsed JSON and an already loaded mesh; `fetch` supplies
@@ -231,19 +253,6 @@ pub fn scene_from_parts(
             vj.image.as_deref().unwrap_or(""),
         );
         views.push(View::new(&vj.name, camera, mask, ignore, image, &sources)?);
-    }
-    // A view without box or mask is placed by the others' geometry: it needs two.
-    let hinted = views.len() + photos.iter().filter(|p| p.hint.is_some()).count();
-    if let Some(p) = photos.iter().find(|p| p.hint.is_none()) {
-        if hinted < 2 {
-            return Err(Error::View {
-                view: p.name.clone(),
-                problem: format!(
-                    "has neither a mask nor a box, and its box can only come from the geometry of at least two \
-                     other views with a box or a mask (the scene has {hinted})"
-                ),
-            });
-        }
     }
     let mut pose = |p: &Option<PoseJson>, key: &str| -> Result<Option<Pose>> {
         let Some(p) = p else { return Ok(None) };

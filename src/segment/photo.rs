@@ -3,22 +3,32 @@
 //!
 //! 0. every view without a mask gets a box (the user's, or the geometry's:
 //!    [`super::hints`]) and a [`SegmentJob`] prompted with it;
-//! 1. the masks the segmenter returns and the given ones are fitted
-//!    ([`Estimator`], from no initial pose);
+//! 1. the masks the segmenter returns and the given ones are fitted (an [`Estimator`]
+//!    the caller runs, from no initial pose) — in this first round without the views
+//!    boxed by the geometry, when two others can be fitted;
 //! 2. each made mask is asked for again from the fitted pose ([`prompt::from_pose`]):
 //!    the silhouette's tight box, a point on the object, a point against the previous
 //!    mask's excess, the previous mask as mask input — the views the fit doubts first —
-//!    and the masks are refitted (from the previous pose when its verdict was `ok`);
+//!    and the masks are refitted: from the previous pose when its verdict was `ok`, else
+//!    searched afresh with the previous pose and its alternatives among the candidates;
 //! 3. until every made mask changed by less than [`PhotoSettings::converged_iou`], or
 //!    after [`PhotoSettings::rounds`] re-prompts.
 //!
+//! A person can step in: before the first round, draw or move the boxes
+//! ([`PhotoFit::set_box`]; [`PhotoFit::boxes`] says which are given and which the
+//! geometry proposes); after the last, add or remove a point on a view
+//! ([`PhotoFit::toggle_point`]): that view is segmented again with its points and the
+//! masks refitted.
+//!
 //! Like [`Estimator`], it is step-wise and does no inference itself: it names the
-//! segmentations it needs ([`PhotoFit::pending`]) and takes the answers
-//! ([`PhotoFit::answer`]) — from a segmenter in this thread, a pool of threads or the
-//! browser's Workers alike. [`run`] drives it with a [`Segmenter`].
+//! segmentations it needs ([`PhotoFit::pending`]), takes the answers
+//! ([`PhotoFit::answer`], which hands back the round's fit to run) and, once that fit
+//! is done, looks at it ([`PhotoFit::advance`]) — with a segmenter in this thread, a
+//! pool of threads or the browser's Workers alike. [`run`] drives it with a
+//! [`Segmenter`].
 
 use super::hints::{box_of_sphere, sphere_from_boxes};
-use super::prompt::{self, Crop, MaskCandidate, SegmentJob, SegmentOutput};
+use super::prompt::{self, Crop, MaskCandidate, PromptPoint, SegmentJob, SegmentOutput};
 use crate::error::{Error, Result};
 use crate::estimator::{Estimator, FitResult, FitSettings, MaskReport};
 use crate::io::scene::Scene;
@@ -29,6 +39,7 @@ use crate::pose::Pose;
 use crate::raster::hard;
 use crate::verdict::Verdict;
 use crate::view::{PhotoView, PixelBox, Rgba, View, ViewSources};
+use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 /// How masks are made and corrected.
@@ -37,7 +48,8 @@ pub struct PhotoSettings {
     /// Re-prompts from the fitted pose after the first fit (default 2).
     pub rounds: usize,
     /// The segmenter's square around a box: `1 + 2·margin` times its longest side
-    /// (default 0.5).
+    /// (default 0.15: measured on the LM-O photographs, a tight crop seen as a 512²
+    /// mosaic tile beat a wide one).
     pub crop_margin: f64,
     /// Masks that all changed less than this (IoU with the previous round's) end the
     /// rounds (default 0.98).
@@ -48,11 +60,14 @@ impl Default for PhotoSettings {
     fn default() -> Self {
         PhotoSettings {
             rounds: 2,
-            crop_margin: 0.5,
+            crop_margin: 0.15,
             converged_iou: 0.98,
         }
     }
 }
+
+/// A user's point clicked within this many pixels of an earlier one removes it.
+pub const POINT_TOGGLE_PX: f64 = 6.0;
 
 /// What makes masks: answers [`SegmentJob`]s on the views' photographs, in order.
 pub trait Segmenter {
@@ -78,16 +93,38 @@ struct Made {
     /// The fitted pose's silhouette the pending job was prompted from (the segmenter's
     /// masks are chosen by it).
     reference: Option<Mask>,
+    /// The user's points, image pixel centres, and whether each is on the object.
+    points: Vec<(DVec2, bool)>,
     report: MaskReport,
 }
 
-enum Stage {
+/// Where the rounds stand.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum State {
+    /// Before [`PhotoFit::start`]: boxes may be drawn.
+    Boxes,
     /// Waiting for the segmenter's answers to `pending`.
     Segment,
-    /// Fitting round `round`'s masks.
-    Fit(Box<Estimator>),
-    /// Finished: the last fit.
-    Done(Box<Estimator>),
+    /// The caller runs the round's fit.
+    Fit,
+    /// Finished (until a point or a box asks for another round).
+    Done,
+}
+
+/// One scene view's box, for a person drawing them (see [`PhotoFit::boxes`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ViewBox {
+    /// The view's name.
+    pub view: String,
+    /// Whether the view has a mask already (given in the scene): it needs no box.
+    pub has_mask: bool,
+    /// The box drawn or given, image pixels `[x_min, y_min, x_max, y_max]`.
+    pub given: Option<[f64; 4]>,
+    /// For a view without one, the box the other views' geometry proposes (when at
+    /// least two have a box or a mask).
+    pub proposed: Option<[f64; 4]>,
+    /// The user's points, `[x, y, 1 on the object | 0 off it]`, image pixel centres.
+    pub points: Vec<[f64; 3]>,
 }
 
 /// Photographs in, pose out (module doc).
@@ -95,25 +132,36 @@ pub struct PhotoFit {
     mesh: Mesh,
     settings: FitSettings,
     photo: PhotoSettings,
-    initial_pose: Option<Pose>,
+    /// The poses the next round's fit starts from (none: it searches).
+    starts: Vec<Pose>,
+    /// The rotations the next round's search scores beside its own (the last fit's).
+    seeds: Vec<Pose>,
     slots: Vec<Slot>,
     pending: Vec<SegmentJob>,
-    stage: Stage,
+    state: State,
     /// Rounds of segmentation answered so far.
     round: usize,
-    /// The scene indices of the views in the current fit (a made mask that came back
-    /// empty sits a round out).
-    fitted: Vec<usize>,
+    /// The last fit's pose, once there is one.
+    fitted: Option<Pose>,
     converged: bool,
     warnings: Vec<String>,
 }
 
 impl PhotoFit {
-    /// Starts on `scene`: boxes for every view without a mask, and the first jobs.
+    /// Starts on `scene`: boxes for every view without a mask, and the first jobs
+    /// ([`PhotoFit::prepare`], then [`PhotoFit::start`]).
     ///
-    /// Errors: a scene without photographs to segment, boxes from the geometry that
-    /// cannot be placed (named by view), invalid settings.
+    /// Errors: those of both.
     pub fn new(scene: Scene, settings: FitSettings, photo: PhotoSettings) -> Result<PhotoFit> {
+        let mut fit = PhotoFit::prepare(scene, settings, photo)?;
+        fit.start()?;
+        Ok(fit)
+    }
+
+    /// The rounds on `scene`, not started: its boxes may still be drawn.
+    ///
+    /// Errors: a scene without photographs to segment, invalid settings.
+    pub fn prepare(scene: Scene, settings: FitSettings, photo: PhotoSettings) -> Result<PhotoFit> {
         settings.validate()?;
         if scene.photos.is_empty() {
             return Err(Error::Settings(
@@ -136,15 +184,15 @@ impl PhotoFit {
         for i in 0..n {
             if photos.peek().is_some_and(|p| p.index == i) {
                 let p = photos.next().expect("peeked");
-                let first_box = p.hint.map(|b| b.to_array()).unwrap_or_default();
                 slots.push(Slot::Made(Made {
                     crop: Crop { x0: 0, y0: 0, side: 0 },
                     mask: None,
                     reference: None,
+                    points: Vec::new(),
                     report: MaskReport {
                         view: p.name.clone(),
-                        first_box_from: if p.hint.is_some() { "box" } else { "geometry" }.into(),
-                        first_box,
+                        first_box_from: String::new(),
+                        first_box: [0.0; 4],
                         areas: Vec::new(),
                         changes: Vec::new(),
                         picks: Vec::new(),
@@ -160,26 +208,44 @@ impl PhotoFit {
                 slots.push(Slot::Given(v));
             }
         }
-        let mut fit = PhotoFit {
+        Ok(PhotoFit {
             mesh: scene.mesh,
             settings,
             photo,
-            initial_pose: scene.initial_pose,
+            starts: scene.initial_pose.into_iter().collect(),
+            seeds: Vec::new(),
             slots,
             pending: Vec::new(),
-            stage: Stage::Segment,
+            state: State::Boxes,
             round: 0,
-            fitted: Vec::new(),
+            fitted: None,
             converged: false,
             warnings: Vec::new(),
-        };
-        fit.first_jobs()?;
-        Ok(fit)
+        })
     }
 
-    /// Boxes for the views without one, from the others' boxes and masks, then a job
-    /// per made view.
-    fn first_jobs(&mut self) -> Result<()> {
+    fn made(&mut self, view: usize) -> Result<&mut Made> {
+        if let Some(Slot::Made(_)) = self.slots.get(view) {
+            let Some(Slot::Made(m)) = self.slots.get_mut(view) else {
+                unreachable!("just matched");
+            };
+            return Ok(m);
+        }
+        match self.slots.get(view) {
+            Some(Slot::Made(_)) => unreachable!("returned above"),
+            Some(Slot::Given(v)) => Err(Error::View {
+                view: v.name().into(),
+                problem: "has a mask already: it is not segmented".into(),
+            }),
+            None => Err(Error::Settings(format!(
+                "photographs: no view {view} (the scene has {})",
+                self.slots.len()
+            ))),
+        }
+    }
+
+    /// The sphere the hinted views' boxes and masks imply, when two or more have one.
+    fn sphere(&self) -> Option<(glam::DVec3, f64)> {
         let hinted: Vec<(&crate::camera::Camera, PixelBox, &str)> = self
             .slots
             .iter()
@@ -188,16 +254,168 @@ impl PhotoFit {
                 Slot::Made(m) => m.photo.hint.map(|b| (&m.photo.camera, b, m.photo.name.as_str())),
             })
             .collect();
-        let sphere = if self
+        (hinted.len() >= 2).then(|| sphere_from_boxes(&hinted).ok()).flatten()
+    }
+
+    /// Every view's box: given (drawn, or in the scene) or proposed by the geometry,
+    /// and its points, in scene order.
+    pub fn boxes(&self) -> Vec<ViewBox> {
+        let sphere = self.sphere();
+        self.slots
+            .iter()
+            .map(|s| match s {
+                Slot::Given(v) => ViewBox {
+                    view: v.name().into(),
+                    has_mask: true,
+                    given: None,
+                    proposed: None,
+                    points: Vec::new(),
+                },
+                Slot::Made(m) => ViewBox {
+                    view: m.photo.name.clone(),
+                    has_mask: false,
+                    given: m.photo.hint.map(|b| b.to_array()),
+                    proposed: match (m.photo.hint, sphere) {
+                        (None, Some((c, r))) => box_of_sphere(&m.photo.name, &m.photo.camera, c, r)
+                            .ok()
+                            .map(|b| b.to_array()),
+                        _ => None,
+                    },
+                    points: m
+                        .points
+                        .iter()
+                        .map(|(p, on)| [p.x, p.y, f64::from(u8::from(*on))])
+                        .collect(),
+                },
+            })
+            .collect()
+    }
+
+    /// Draws (or, with `None`, removes) view `view`'s box, image pixels
+    /// `[x_min, y_min, x_max, y_max]`. Before the first round it is the box the view
+    /// is first prompted with; once the rounds are over, the view is segmented again
+    /// from it (its points kept) and the masks refitted.
+    ///
+    /// Errors: a bad box (named by view), a view with a mask, or a round under way.
+    pub fn set_box(&mut self, view: usize, b: Option<[f64; 4]>) -> Result<()> {
+        let state = self.state;
+        if !matches!(state, State::Boxes | State::Done) {
+            return Err(Error::Settings(
+                "photographs: boxes can be changed before the fit starts or once it is done".into(),
+            ));
+        }
+        let margin = self.photo.crop_margin;
+        let m = self.made(view)?;
+        let b = b
+            .map(|b| PixelBox::new(&m.photo.name, b, m.photo.camera.width, m.photo.camera.height))
+            .transpose()?;
+        if state == State::Done {
+            let Some(b) = b else {
+                return Err(Error::View {
+                    view: m.photo.name.clone(),
+                    problem: "once fitted, a view's box can be redrawn but not removed".into(),
+                });
+            };
+            m.crop = Crop::around(&b, margin);
+            m.reference = None;
+            let mut job = SegmentJob::from_box(view, m.crop, &b);
+            add_points(&mut job, &m.points);
+            self.pending = vec![job];
+            self.state = State::Segment;
+        }
+        let m = self.made(view)?;
+        m.photo.hint = b;
+        Ok(())
+    }
+
+    /// Adds a point on (`object`) or off the object at image pixel `(x, y)` of view
+    /// `view` — or, within [`POINT_TOGGLE_PX`] of one of its points, removes that one.
+    /// Before the first round the points join the first prompts; once the rounds are
+    /// over, the view is segmented again (prompted from the fitted pose and all its
+    /// points) and the masks refitted.
+    ///
+    /// Errors: a point off the image or not finite, a view with a mask, or a round
+    /// under way.
+    pub fn toggle_point(&mut self, view: usize, x: f64, y: f64, object: bool) -> Result<()> {
+        let state = self.state;
+        if !matches!(state, State::Boxes | State::Done) {
+            return Err(Error::Settings(
+                "photographs: points can be added before the fit starts or once it is done".into(),
+            ));
+        }
+        self.made(view)?;
+        let (mesh, fitted, margin) = (&self.mesh, self.fitted, self.photo.crop_margin);
+        let Some(Slot::Made(m)) = self.slots.get_mut(view) else {
+            unreachable!("made() errs for every other slot");
+        };
+        let (w, h) = (m.photo.camera.width as f64, m.photo.camera.height as f64);
+        if !(x.is_finite() && y.is_finite() && x > -0.5 && y > -0.5 && x < w - 0.5 && y < h - 0.5) {
+            return Err(Error::View {
+                view: m.photo.name.clone(),
+                problem: format!("point ({x}, {y}) is not on the {w}×{h} photograph"),
+            });
+        }
+        let p = DVec2::new(x, y);
+        match m.points.iter().position(|(q, _)| (*q - p).length() <= POINT_TOGGLE_PX) {
+            Some(i) => {
+                m.points.remove(i);
+            }
+            None => m.points.push((p, object)),
+        }
+        if state == State::Done {
+            let Some(pose) = fitted else {
+                unreachable!("a done fit has a pose");
+            };
+            let job = reprompt(mesh, &pose, view, m, margin);
+            self.pending = vec![job];
+            self.state = State::Segment;
+        }
+        Ok(())
+    }
+
+    /// The first round: boxes for the views without one, from the others' boxes and
+    /// masks, then a job per made view.
+    ///
+    /// Errors: called twice; a view with neither box nor mask when fewer than two
+    /// others have one; boxes from the geometry that cannot be placed (named by view).
+    pub fn start(&mut self) -> Result<()> {
+        if self.state != State::Boxes {
+            return Err(Error::Settings("photographs: the rounds have started already".into()));
+        }
+        let hinted = self
             .slots
             .iter()
-            .any(|s| matches!(s, Slot::Made(m) if m.photo.hint.is_none()))
-        {
-            Some(sphere_from_boxes(&hinted)?)
-        } else {
-            None
+            .filter(|s| matches!(s, Slot::Given(_)) || matches!(s, Slot::Made(m) if m.photo.hint.is_some()))
+            .count();
+        let unhinted = self.slots.iter().find_map(|s| match s {
+            Slot::Made(m) if m.photo.hint.is_none() => Some(m.photo.name.clone()),
+            _ => None,
+        });
+        let sphere = match unhinted {
+            None => None,
+            Some(name) if hinted < 2 => {
+                return Err(Error::View {
+                    view: name,
+                    problem: format!(
+                        "has neither a mask nor a box, and its box can only come from the geometry of at least \
+                         two other views with a box or a mask (the scene has {hinted})"
+                    ),
+                })
+            }
+            Some(_) => {
+                let hinted: Vec<(&crate::camera::Camera, PixelBox, &str)> = self
+                    .slots
+                    .iter()
+                    .filter_map(|s| match s {
+                        Slot::Given(v) => PixelBox::of_mask(v.mask()).map(|b| (v.camera(), b, v.name())),
+                        Slot::Made(m) => m.photo.hint.map(|b| (&m.photo.camera, b, m.photo.name.as_str())),
+                    })
+                    .collect();
+                Some(sphere_from_boxes(&hinted)?)
+            }
         };
         let margin = self.photo.crop_margin;
+        let mut jobs = Vec::new();
         for (i, s) in self.slots.iter_mut().enumerate() {
             let Slot::Made(m) = s else { continue };
             let b = match (m.photo.hint, sphere) {
@@ -205,17 +423,50 @@ impl PhotoFit {
                 (None, Some((c, r))) => box_of_sphere(&m.photo.name, &m.photo.camera, c, r)?,
                 (None, None) => unreachable!("a sphere is made when a view has no box"),
             };
+            m.report.first_box_from = if m.photo.hint.is_some() { "box" } else { "geometry" }.into();
             m.report.first_box = b.to_array();
             m.crop = Crop::around(&b, margin);
-            self.pending.push(SegmentJob::from_box(i, m.crop, &b));
+            let mut job = SegmentJob::from_box(i, m.crop, &b);
+            add_points(&mut job, &m.points);
+            jobs.push(job);
         }
+        self.pending = jobs;
+        self.state = State::Segment;
         Ok(())
     }
 
-    /// The segmentations the fit waits for (empty while it fits or when done).
+    /// Before [`PhotoFit::start`], the first round's jobs of the views that have their
+    /// box already — the same crops and prompts `start` will ask for — so that a
+    /// segmenter can encode their crops while the other boxes are drawn. Empty once
+    /// started.
+    pub fn warm_jobs(&self) -> Vec<SegmentJob> {
+        if self.state != State::Boxes {
+            return Vec::new();
+        }
+        self.slots
+            .iter()
+            .enumerate()
+            .filter_map(|(i, s)| match s {
+                Slot::Made(m) => m.photo.hint.map(|b| {
+                    let mut job = SegmentJob::from_box(i, Crop::around(&b, self.photo.crop_margin), &b);
+                    add_points(&mut job, &m.points);
+                    job
+                }),
+                Slot::Given(_) => None,
+            })
+            .collect()
+    }
+
+    /// Whether [`PhotoFit::start`] has been called.
+    pub fn is_started(&self) -> bool {
+        self.state != State::Boxes
+    }
+
+    /// The segmentations the rounds wait for (empty while the caller fits, when done,
+    /// or before the start).
     pub fn pending(&self) -> &[SegmentJob] {
-        match self.stage {
-            Stage::Segment => &self.pending,
+        match self.state {
+            State::Segment => &self.pending,
             _ => &[],
         }
     }
@@ -228,12 +479,18 @@ impl PhotoFit {
         }
     }
 
-    /// Takes the answers to [`PhotoFit::pending`], in order, and starts the round's fit.
+    /// The number of views (given and made), in scene order.
+    pub fn view_count(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// Takes the answers to [`PhotoFit::pending`], in order, and returns the round's fit
+    /// for the caller to run to its end, then to hand to [`PhotoFit::advance`].
     ///
     /// Errors: not waiting for answers, the wrong number of them, a mask of the wrong
-    /// size, or no view left to fit.
-    pub fn answer(&mut self, outputs: Vec<SegmentOutput>) -> Result<()> {
-        if !matches!(self.stage, Stage::Segment) || outputs.len() != self.pending.len() {
+    /// size, or no view left to fit. A wrong answer changes nothing: the same jobs wait.
+    pub fn answer(&mut self, outputs: Vec<SegmentOutput>) -> Result<Estimator> {
+        if self.state != State::Segment || outputs.len() != self.pending.len() {
             return Err(Error::Settings(format!(
                 "photographs: {} answers for {} segmentations asked",
                 outputs.len(),
@@ -272,14 +529,7 @@ impl PhotoFit {
                 .into_iter()
                 .map(|c| (job.crop.to_image(&c.mask, w, h), c))
                 .collect();
-            // The segmenter's choice, or — once there is a fit — the reading that
-            // agrees best with the fitted silhouette.
-            let pick = match m.reference.take() {
-                Some(r) => (0..masks.len())
-                    .max_by(|&a, &b| metrics::hard_iou(&masks[a].0, &r).total_cmp(&metrics::hard_iou(&masks[b].0, &r)))
-                    .expect("candidates checked non-empty"),
-                None => out.preferred,
-            };
+            let pick = choose(&masks, out.preferred, m.reference.take().as_ref(), &m.points);
             m.report.picks.push(pick);
             let (mask, chosen) = masks.swap_remove(pick);
             if let Some((prev, _)) = &m.mask {
@@ -294,19 +544,33 @@ impl PhotoFit {
         }
         self.round += 1;
         self.converged = all_converged;
-        self.start_fit()
+        let est = self.round_fit()?;
+        self.state = State::Fit;
+        Ok(est)
     }
 
-    /// The views of this round's fit: the given ones and every made mask with an object
-    /// pixel the ignore mask leaves.
-    fn start_fit(&mut self) -> Result<()> {
+    /// The fit of this round's views: the given ones and every made mask with an
+    /// object pixel the ignore mask leaves.
+    fn round_fit(&mut self) -> Result<Estimator> {
         let mut views = Vec::with_capacity(self.slots.len());
-        self.fitted.clear();
-        for (i, s) in self.slots.iter().enumerate() {
+        // In the first round a view boxed by the geometry sits out when two others can be
+        // fitted: its rough square prompts the segmenter poorly, and the fit's
+        // silhouette prompts it far better in the next round.
+        let placed = self
+            .slots
+            .iter()
+            .filter(|s| match s {
+                Slot::Given(_) => true,
+                Slot::Made(m) => m.photo.hint.is_some() && m.mask.as_ref().is_some_and(|(k, _)| k.area() > 0),
+            })
+            .count();
+        let first = self.round == 1 && placed >= 2;
+        for s in &self.slots {
             let v = match s {
                 Slot::Given(v) => v.clone(),
+                Slot::Made(m) if first && m.photo.hint.is_none() => continue,
                 Slot::Made(m) => {
-                    let (mask, _) = m.mask.as_ref().expect("answered before a fit");
+                    let Some((mask, _)) = m.mask.as_ref() else { continue };
                     let p = &m.photo;
                     let sources = ViewSources::files("(made by the segmenter)", "ignore mask", "photograph");
                     match View::new(
@@ -330,100 +594,67 @@ impl PhotoFit {
                 }
             };
             views.push(v);
-            self.fitted.push(i);
         }
         if views.is_empty() {
             return Err(Error::Settings(
                 "photographs: the segmenter found the object in no view: check the boxes".into(),
             ));
         }
-        let est = Estimator::new(self.mesh.clone(), views, self.initial_pose, self.settings.clone())?;
-        self.stage = Stage::Fit(Box::new(est));
-        Ok(())
-    }
-
-    /// The round's estimator while it fits (step it until done, then [`PhotoFit::advance`]).
-    pub fn estimator_mut(&mut self) -> Option<&mut Estimator> {
-        match &mut self.stage {
-            Stage::Fit(e) => Some(e),
-            _ => None,
+        if self.starts.is_empty() {
+            Estimator::with_seeds(self.mesh.clone(), views, &self.seeds, self.settings.clone())
+        } else {
+            Estimator::from_starts(self.mesh.clone(), views, self.starts.clone(), self.settings.clone())
         }
     }
 
-    /// The estimator of the current or the last fit.
-    pub fn estimator(&self) -> Option<&Estimator> {
-        match &self.stage {
-            Stage::Fit(e) | Stage::Done(e) => Some(e),
-            Stage::Segment => None,
-        }
-    }
-
-    /// After a round's fit is done: re-prompts from its pose (module doc), or ends.
+    /// Looks at the round's finished fit: re-prompts from its pose (module doc), or
+    /// ends the rounds.
     ///
-    /// Errors: the round's fit is not done.
-    pub fn advance(&mut self) -> Result<()> {
-        let est = match std::mem::replace(&mut self.stage, Stage::Segment) {
-            Stage::Fit(e) if e.is_done() => e,
-            other => {
-                self.stage = other;
-                return Err(Error::Settings(
-                    "photographs: advance before the round's fit is done".into(),
-                ));
-            }
-        };
+    /// Errors: no round's fit under way, or `fitted` not done.
+    pub fn advance(&mut self, fitted: &Estimator) -> Result<()> {
+        if self.state != State::Fit || !fitted.is_done() {
+            return Err(Error::Settings(
+                "photographs: advance is for the round's fit once it is done".into(),
+            ));
+        }
+        let pose = fitted.pose();
+        self.fitted = Some(pose);
+        let judgement = fitted.judgement().cloned();
+        // The next fit starts from this pose when it was good; else it searches afresh,
+        // this pose and its alternatives among the candidates.
+        let ok = judgement.as_ref().is_some_and(|j| j.verdict == Verdict::Ok);
+        let found: Vec<Pose> = std::iter::once(pose)
+            .chain(fitted.alternatives().iter().map(|a| a.pose))
+            .collect();
+        (self.starts, self.seeds) = if ok { (found, Vec::new()) } else { (Vec::new(), found) };
         if self.converged || self.round > self.photo.rounds {
-            self.stage = Stage::Done(est);
+            self.state = State::Done;
             return Ok(());
         }
-        let pose = est.pose();
-        let judgement = est.judgement().cloned();
-        let ok = judgement.as_ref().is_some_and(|j| j.verdict == Verdict::Ok);
-        // From the previous pose when it was good (no search), else searched afresh.
-        self.initial_pose = ok.then_some(pose);
         let doubted: Vec<String> = judgement.map(|j| j.doubted_views).unwrap_or_default();
         let margin = self.photo.crop_margin;
         let mut jobs = Vec::new();
         for (i, s) in self.slots.iter_mut().enumerate() {
             let Slot::Made(m) = s else { continue };
-            let silhouette = hard::render(&self.mesh, &pose, &m.photo.camera);
-            let tight = PixelBox::of_mask(&silhouette);
-            // A new square when the silhouette left the old one or shrank within it (the
-            // previous logits are then of another crop).
-            let keep = tight.is_some_and(|b| m.crop.holds(&b, 0.05, 0.25));
-            if !keep {
-                if let Some(b) = tight {
-                    m.crop = Crop::around(&b, margin);
-                }
-            }
-            let previous = m
-                .mask
-                .as_ref()
-                .filter(|_| keep)
-                .map(|(mask, logits)| (mask, logits.as_slice()));
-            let job = prompt::from_pose(i, m.crop, &silhouette, previous).unwrap_or_else(|| {
-                // The pose puts the object outside this photograph: ask with the first box.
-                let b = PixelBox::new(
-                    &m.photo.name,
-                    m.report.first_box,
-                    m.photo.camera.width,
-                    m.photo.camera.height,
-                )
-                .expect("validated when first made");
-                m.crop = Crop::around(&b, margin);
-                SegmentJob::from_box(i, m.crop, &b)
-            });
-            m.reference = tight.is_some().then_some(silhouette);
+            let job = reprompt(&self.mesh, &pose, i, m, margin);
             jobs.push((doubted.contains(&m.photo.name), job));
         }
         // The views the fit doubts first.
         jobs.sort_by_key(|(doubted, _)| !doubted);
         self.pending = jobs.into_iter().map(|(_, j)| j).collect();
+        self.state = State::Segment;
         Ok(())
     }
 
     /// Whether the rounds are over.
     pub fn is_done(&self) -> bool {
-        matches!(self.stage, Stage::Done(_))
+        self.state == State::Done
+    }
+
+    /// Whether the caller should be running the round's fit (between
+    /// [`PhotoFit::answer`] and [`PhotoFit::advance`]).
+    pub fn is_fitting(&self) -> bool {
+        self.state == State::Fit
     }
 
     /// Segmentation rounds answered so far.
@@ -443,17 +674,16 @@ impl PhotoFit {
             .collect()
     }
 
-    /// How each made mask came about (with its IoU against the current fit's
-    /// silhouette, once there is a fit).
-    pub fn reports(&self) -> Vec<MaskReport> {
-        let pose = self.estimator().map(|e| e.pose());
+    /// How each made mask came about, with its IoU against the silhouette at `pose`
+    /// (the fit's, when given).
+    pub fn reports(&self, pose: Option<&Pose>) -> Vec<MaskReport> {
         self.slots
             .iter()
             .filter_map(|s| match s {
                 Slot::Made(m) => {
                     let mut r = m.report.clone();
                     if let (Some(p), Some((mask, _))) = (pose, &m.mask) {
-                        r.iou_with_fit = metrics::hard_iou(mask, &hard::render(&self.mesh, &p, &m.photo.camera));
+                        r.iou_with_fit = metrics::hard_iou(mask, &hard::render(&self.mesh, p, &m.photo.camera));
                     }
                     Some(r)
                 }
@@ -462,12 +692,11 @@ impl PhotoFit {
             .collect()
     }
 
-    /// The result of the last fit, with the made masks' reports (SPEC §3); `None`
-    /// before the first fit.
-    pub fn result(&self, seconds: f64, ground_truth: Option<&Pose>) -> Option<FitResult> {
-        let mut r = self.estimator()?.result(seconds, ground_truth);
-        r.masks = self.reports();
-        Some(r)
+    /// The result of `fitted` (a round's fit), with the made masks' reports (SPEC §3).
+    pub fn result(&self, fitted: &Estimator, seconds: f64, ground_truth: Option<&Pose>) -> FitResult {
+        let mut r = fitted.result(seconds, ground_truth);
+        r.masks = self.reports(Some(&fitted.pose()));
+        r
     }
 
     /// What was accepted with a reservation (a view that sat a round out).
@@ -476,27 +705,126 @@ impl PhotoFit {
     }
 }
 
-/// Drives `fit` to the end with `segmenter`, calling `progress` after every
-/// segmentation round and every fit.
+/// The user's points of a view, in a job's crop (those inside it).
+fn add_points(job: &mut SegmentJob, points: &[(DVec2, bool)]) {
+    let side = job.crop.side as f64;
+    for &(p, object) in points {
+        let at = job.crop.to_crop(p);
+        if at.x >= 0.0 && at.y >= 0.0 && at.x < side && at.y < side {
+            job.points.push(PromptPoint {
+                at: at.to_array(),
+                object,
+            });
+        }
+    }
+}
+
+/// A made view's job from the fitted `pose` (module doc), with its user's points; sets
+/// the silhouette its answer is chosen by.
+fn reprompt(mesh: &Mesh, pose: &Pose, view: usize, m: &mut Made, margin: f64) -> SegmentJob {
+    let silhouette = hard::render(mesh, pose, &m.photo.camera);
+    let tight = PixelBox::of_mask(&silhouette);
+    // The square must hold the silhouette and the user's points.
+    let reach = tight.map(|b| {
+        m.points.iter().fold(b, |b, (p, _)| PixelBox {
+            x0: b.x0.min(p.x),
+            y0: b.y0.min(p.y),
+            x1: b.x1.max(p.x + 1.0),
+            y1: b.y1.max(p.y + 1.0),
+        })
+    });
+    // A new square when the silhouette left the old one or shrank within it (the
+    // previous logits are then of another crop).
+    let keep = reach.is_some_and(|b| m.crop.holds(&b, 0.05, 0.25));
+    if !keep {
+        if let Some(b) = reach {
+            m.crop = Crop::around(&b, margin);
+        }
+    }
+    let previous = m
+        .mask
+        .as_ref()
+        .filter(|_| keep)
+        .map(|(mask, logits)| (mask, logits.as_slice()));
+    let mut job = prompt::from_pose(view, m.crop, &silhouette, previous).unwrap_or_else(|| {
+        // The pose puts the object outside this photograph: ask with the first box.
+        let b = PixelBox {
+            x0: m.report.first_box[0],
+            y0: m.report.first_box[1],
+            x1: m.report.first_box[2],
+            y1: m.report.first_box[3],
+        };
+        m.crop = Crop::around(&b, margin);
+        SegmentJob::from_box(view, m.crop, &b)
+    });
+    add_points(&mut job, &m.points);
+    m.reference = tight.is_some().then_some(silhouette);
+    job
+}
+
+/// Which of the segmenter's masks to take: the one that keeps most of the user's
+/// points on the right side; among those, the segmenter's choice or — once there is a
+/// fit — the reading that agrees best with the fitted silhouette.
+fn choose(
+    masks: &[(Mask, MaskCandidate)],
+    preferred: usize,
+    reference: Option<&Mask>,
+    points: &[(DVec2, bool)],
+) -> usize {
+    let kept = |m: &Mask| {
+        points
+            .iter()
+            .filter(|(p, on)| {
+                let (x, y) = (p.x.round(), p.y.round());
+                let inside = x >= 0.0 && y >= 0.0 && m.get(x as u32, y as u32);
+                inside == *on
+            })
+            .count()
+    };
+    let best_kept = masks.iter().map(|(m, _)| kept(m)).max().unwrap_or(0);
+    let eligible = |i: &usize| kept(&masks[*i].0) == best_kept;
+    match reference {
+        Some(r) => (0..masks.len())
+            .filter(eligible)
+            .max_by(|&a, &b| metrics::hard_iou(&masks[a].0, r).total_cmp(&metrics::hard_iou(&masks[b].0, r)))
+            .expect("candidates checked non-empty"),
+        None if eligible(&preferred) => preferred,
+        None => (0..masks.len())
+            .filter(eligible)
+            .max_by(|&a, &b| masks[a].1.score.total_cmp(&masks[b].1.score))
+            .expect("candidates checked non-empty"),
+    }
+}
+
+/// Drives `fit` to the end with `segmenter` (starting it if it was only prepared),
+/// calling `progress` after every segmentation round (with the fit about to run) and
+/// every fit (done). Returns the last fit.
 ///
 /// Errors: the segmenter's, the fit's.
-pub fn run(fit: &mut PhotoFit, segmenter: &mut dyn Segmenter, mut progress: impl FnMut(&PhotoFit)) -> Result<()> {
-    while !fit.is_done() {
-        if let Some(est) = fit.estimator_mut() {
-            est.run(usize::MAX)?;
-            fit.advance()?;
-        } else {
-            let jobs = fit.pending().to_vec();
-            let images: Vec<&Rgba> = jobs
-                .iter()
-                .map(|j| fit.image(j.view).expect("jobs are for made views"))
-                .collect();
-            let outputs = segmenter.segment(&jobs, &images)?;
-            fit.answer(outputs)?;
-        }
-        progress(fit);
+pub fn run(
+    fit: &mut PhotoFit,
+    segmenter: &mut dyn Segmenter,
+    mut progress: impl FnMut(&PhotoFit, &Estimator),
+) -> Result<Estimator> {
+    if !fit.is_started() {
+        fit.start()?;
     }
-    Ok(())
+    loop {
+        let jobs = fit.pending().to_vec();
+        let images: Vec<&Rgba> = jobs
+            .iter()
+            .map(|j| fit.image(j.view).expect("jobs are for made views"))
+            .collect();
+        let outputs = segmenter.segment(&jobs, &images)?;
+        let mut est = fit.answer(outputs)?;
+        progress(fit, &est);
+        est.run(usize::MAX)?;
+        fit.advance(&est)?;
+        progress(fit, &est);
+        if fit.is_done() {
+            return Ok(est);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -600,8 +928,8 @@ mod tests {
     fn the_fit_chooses_the_reading_that_agrees_with_the_geometry() {
         let (scene, truth) = scene();
         let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
-        run(&mut fit, &mut Fake(truth.clone()), |_| {}).unwrap();
-        let reports = fit.reports();
+        let est = run(&mut fit, &mut Fake(truth.clone()), |_, _| {}).unwrap();
+        let reports = fit.reports(Some(&est.pose()));
         // View 0: the segmenter's preference first, then the true reading, chosen by
         // the fitted silhouette; the other views had one reading each.
         assert_eq!(reports[0].picks.first(), Some(&0), "{:?}", reports[0].picks);
@@ -610,9 +938,79 @@ mod tests {
         for ((name, mask), t) in fit.masks().iter().zip(&truth) {
             assert_eq!(metrics::hard_iou(mask.unwrap(), t), 1.0, "{name}");
         }
-        let r = fit.result(0.0, None).unwrap();
+        let r = fit.result(&est, 0.0, None);
         assert_eq!(r.verdict, Some(Verdict::Ok));
         assert_eq!(r.masks.len(), 3);
+    }
+
+    #[test]
+    fn boxes_are_drawn_proposed_and_warmed_before_the_start() {
+        let (mut scene, truth) = scene();
+        for p in &mut scene.photos[1..] {
+            p.hint = None;
+        }
+        let mut fit = PhotoFit::prepare(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
+        // One box: nothing proposed yet, and the start names the view it cannot place.
+        let b = fit.boxes();
+        assert!(b[0].given.is_some() && b[1].given.is_none() && b.iter().all(|v| v.proposed.is_none()));
+        let e = fit.start().unwrap_err().to_string();
+        assert!(e.contains("view 'view1'") && e.contains("at least two"), "{e}");
+        assert_eq!(fit.warm_jobs().len(), 1);
+        // A second box drawn: the third view's is proposed; a bad box is refused by name.
+        let given = b[0].given.unwrap();
+        let e = fit.set_box(1, Some([5.0, 5.0, 2.0, 9.0])).unwrap_err().to_string();
+        assert!(e.contains("view 'view1'"), "{e}");
+        let truth1 = PixelBox::of_mask(&truth[1]).unwrap().to_array();
+        fit.set_box(1, Some(truth1)).unwrap();
+        let b = fit.boxes();
+        assert_eq!(b[0].given, Some(given));
+        assert!(b[2].given.is_none() && b[2].proposed.is_some());
+        // Points toggle: a second click near the first removes it.
+        fit.toggle_point(0, 80.0, 80.0, true).unwrap();
+        fit.toggle_point(0, 100.0, 60.0, false).unwrap();
+        fit.toggle_point(0, 82.0, 81.0, true).unwrap();
+        assert_eq!(fit.boxes()[0].points, vec![[100.0, 60.0, 0.0]]);
+        assert!(fit.toggle_point(0, f64::NAN, 1.0, true).is_err() && fit.toggle_point(0, 1e6, 1.0, true).is_err());
+        // The warm jobs are the start's own, for the views with a box.
+        let warm = fit.warm_jobs();
+        assert_eq!(warm.len(), 2);
+        fit.start().unwrap();
+        assert_eq!(fit.pending().len(), 3);
+        assert_eq!(&fit.pending()[..2], &warm[..]);
+        assert_eq!(fit.pending()[0].points.len(), 1, "the point joins view 0's prompt");
+        assert!(fit.warm_jobs().is_empty());
+        assert!(fit.set_box(0, Some(given)).is_err(), "no boxes while a round runs");
+    }
+
+    #[test]
+    fn a_point_after_the_rounds_segments_that_view_again() {
+        let (scene, truth) = scene();
+        let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
+        let mut seg = Fake(truth);
+        let est = run(&mut fit, &mut seg, |_, _| {}).unwrap();
+        let rounds = fit.rounds();
+        let areas = fit.reports(None)[2].areas.len();
+        // A point off the object on view 2: that view alone is asked again, from the pose.
+        let c = PixelBox::of_mask(fit.masks()[2].1.unwrap()).unwrap();
+        fit.toggle_point(2, c.x0 - 3.0, c.y0 - 3.0, false).unwrap();
+        assert!(!fit.is_done());
+        let jobs = fit.pending().to_vec();
+        assert_eq!(jobs.len(), 1);
+        assert_eq!(jobs[0].view, 2);
+        assert!(jobs[0].points.iter().any(|p| !p.object), "{:?}", jobs[0].points);
+        let est2 = run(&mut fit, &mut seg, |_, _| {}).unwrap();
+        assert!(fit.is_done() && fit.rounds() == rounds + 1);
+        assert_eq!(fit.reports(None)[2].areas.len(), areas + 1);
+        assert_eq!(
+            fit.reports(None)[1].areas.len(),
+            areas,
+            "the other views were not asked"
+        );
+        assert!(metrics::pose_errors(fit_mesh(&fit), &est2.pose(), &est.pose()).add_rel < 0.01);
+    }
+
+    fn fit_mesh(fit: &PhotoFit) -> &Mesh {
+        &fit.mesh
     }
 
     #[test]
@@ -620,21 +1018,22 @@ mod tests {
         let (scene, truth) = scene();
         let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
         assert_eq!(fit.pending().len(), 3);
-        let e = fit.answer(Vec::new()).unwrap_err().to_string();
+        let e = fit.answer(Vec::new()).err().unwrap().to_string();
         assert!(e.contains("0 answers for 3"), "{e}");
         let mut answers = Fake(truth.clone()).segment(fit.pending(), &[]).unwrap();
         answers[1].candidates[0].mask = Mask::empty(3, 3);
-        let e = fit.answer(answers.clone()).unwrap_err().to_string();
+        let e = fit.answer(answers.clone()).err().unwrap().to_string();
         assert!(e.contains("view1"), "{e}");
         // Nothing was taken: the same jobs wait, and a good answer is still accepted.
         assert_eq!(fit.pending().len(), 3);
         answers[1].candidates[0].mask = answers[0].candidates[0].mask.clone();
         answers[1].preferred = 7;
-        let e = fit.answer(answers).unwrap_err().to_string();
+        let e = fit.answer(answers).err().unwrap().to_string();
         assert!(e.contains("view1") && e.contains("preferred"), "{e}");
-        assert!(fit.advance().is_err(), "advance before a fit");
         let good = Fake(truth).segment(fit.pending(), &[]).unwrap();
-        fit.answer(good).unwrap();
-        assert!(fit.estimator().is_some());
+        let est = fit.answer(good).unwrap();
+        assert!(fit.is_fitting() && fit.pending().is_empty());
+        let e = fit.advance(&est).unwrap_err().to_string();
+        assert!(e.contains("once it is done"), "{e}");
     }
 }

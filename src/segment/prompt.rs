@@ -159,6 +159,21 @@ impl SegmentOutput {
 }
 
 impl SegmentJob {
+    /// The points in the segmenter's coordinates (pixel edges: the core's pixel centre
+    /// i is the segmenter's i + ½), `[x, y, 1 on the object | 0 off it]`.
+    pub fn segmenter_points(&self) -> Vec<[f32; 3]> {
+        self.points
+            .iter()
+            .map(|p| {
+                [
+                    (p.at[0] + 0.5) as f32,
+                    (p.at[1] + 0.5) as f32,
+                    f32::from(u8::from(p.object)),
+                ]
+            })
+            .collect()
+    }
+
     /// A job from a box in image pixels (the user's, or the geometry's) in `crop`.
     pub fn from_box(view: usize, crop: Crop, b: &PixelBox) -> SegmentJob {
         let (x, y) = (crop.x0 as f64, crop.y0 as f64);

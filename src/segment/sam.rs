@@ -25,6 +25,11 @@ pub struct SamSegmenter {
     embeddings: HashMap<Key, Embedding>,
     /// Images encoded so far (a figure for the log).
     pub encoded: usize,
+    /// Encoder runs so far (fewer than `encoded` with `mosaic`).
+    pub runs: usize,
+    /// Whether crops to encode together share one run of the encoder, up to four as the
+    /// 512² tiles of a mosaic (default), rather than one 1024² run each.
+    pub mosaic: bool,
 }
 
 impl SamSegmenter {
@@ -37,7 +42,16 @@ impl SamSegmenter {
             sam,
             embeddings: HashMap::new(),
             encoded: 0,
+            runs: 0,
+            mosaic: true,
         })
+    }
+}
+
+impl SamSegmenter {
+    /// The model itself (for timing its encoder).
+    pub fn model(&self) -> &Sam {
+        &self.sam
     }
 }
 
@@ -58,19 +72,28 @@ impl Segmenter for SamSegmenter {
                 (rgb, key)
             })
             .collect();
-        // New encodings first, in parallel.
+        // New encodings first: in mosaics of up to four crops (or one run each), the
+        // runs in parallel.
         let mut seen = std::collections::HashSet::new();
         let missing: Vec<usize> = (0..jobs.len())
             .filter(|&i| !self.embeddings.contains_key(&crops[i].1) && seen.insert(crops[i].1))
             .collect();
+        let per_run = if self.mosaic { localisebot_segment::MAX_TILES } else { 1 };
+        let groups: Vec<&[usize]> = missing.chunks(per_run).collect();
         let sam = &self.sam;
-        let made: Vec<Result<Embedding>> = missing
+        let made: Vec<Result<Vec<Embedding>>> = groups
             .par_iter()
-            .map(|&i| sam.embed(&crops[i].0, jobs[i].crop.side).map_err(|e| fail(&jobs[i], e)))
+            .map(|g| {
+                let tiles: Vec<(&[u8], u32)> = g.iter().map(|&i| (crops[i].0.as_slice(), jobs[i].crop.side)).collect();
+                sam.embed_group(&tiles).map_err(|e| fail(&jobs[g[0]], e))
+            })
             .collect();
-        for (&i, e) in missing.iter().zip(made) {
-            self.embeddings.insert(crops[i].1, e?);
-            self.encoded += 1;
+        for (g, e) in groups.iter().zip(made) {
+            for (&i, e) in g.iter().zip(e?) {
+                self.embeddings.insert(crops[i].1, e);
+                self.encoded += 1;
+            }
+            self.runs += 1;
         }
         let embeddings = &self.embeddings;
         jobs.par_iter()
@@ -80,11 +103,10 @@ impl Segmenter for SamSegmenter {
                 let b = job.prompt_box;
                 let prompt = Prompt {
                     bbox: Some([b[0] as f32, b[1] as f32, b[2] as f32, b[3] as f32]),
-                    // Pixel centres (the core's coordinates) at i + ½ in the segmenter's.
                     points: job
-                        .points
-                        .iter()
-                        .map(|p| (p.at[0] as f32 + 0.5, p.at[1] as f32 + 0.5, p.object))
+                        .segmenter_points()
+                        .into_iter()
+                        .map(|[x, y, label]| (x, y, label > 0.5))
                         .collect(),
                     mask_input: job.previous.clone(),
                 };

@@ -62,6 +62,14 @@ impl FileSet {
         o.into()
     }
 
+    /// Whether the scene these files make has views without a mask — photographs to
+    /// segment (a `PhotoSession`, and the segmenter's module) rather than a `Session`.
+    /// Decided from the scene's JSON alone; `false` when the files make no scene.
+    #[wasm_bindgen(js_name = needsSegmenter)]
+    pub fn needs_segmenter(&self) -> bool {
+        self.0.needs_segmenter()
+    }
+
     /// The number of files.
     #[wasm_bindgen(getter)]
     pub fn length(&self) -> usize {

