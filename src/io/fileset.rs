@@ -604,9 +604,11 @@ pub fn scene_references(scene_file: &str, text: &str) -> Result<Vec<String>> {
 /// (loading the mesh then says what is wrong).
 pub fn mesh_references(mesh_file: &str, bytes: &[u8]) -> Vec<String> {
     let json: Option<Value> = if bytes.starts_with(b"glTF") {
-        gltf::binary::Glb::from_slice(bytes)
+        // Through the loader's own header checks: the gltf crate's GLB reader
+        // underflows on a header length below 12 (found by fuzzing).
+        crate::io::gltf::split_glb(bytes)
             .ok()
-            .and_then(|glb| serde_json::from_slice(&glb.json).ok())
+            .and_then(|(json, _)| serde_json::from_slice(&json).ok())
     } else if extension(mesh_file) == "gltf" {
         serde_json::from_slice(bytes).ok()
     } else {
@@ -631,6 +633,19 @@ mod tests {
     use crate::io::gltf_write;
     use crate::io::png::{encode_gray, encode_rgba};
     use crate::{CameraJson, PoseJson, ViewJson};
+
+    #[test]
+    fn glb_headers_too_short_for_their_own_length_list_no_references() {
+        // "glTF", version 2, a length of 0..11 (the gltf crate subtracted 12 from it;
+        // found by fuzzing), then zeros.
+        for length in [0u32, 11, 12, 19] {
+            let mut glb = b"glTF".to_vec();
+            glb.extend(2u32.to_le_bytes());
+            glb.extend(length.to_le_bytes());
+            glb.extend([0u8; 8]);
+            assert!(mesh_references("m.glb", &glb).is_empty(), "length {length}");
+        }
+    }
 
     /// A 3-view scene of a small blob, as files: (mesh bytes, per-view (camera JSON,
     /// mask PNG, image PNG), scene JSON naming `mesh` and `masks/…`, `images/…`).

@@ -95,7 +95,7 @@ pub fn load_with(file: &str, bytes: &[u8], extra: Resolver, limits: &Limits) -> 
 
 /// Splits a GLB into its JSON chunk and optional BIN chunk, checking the header first
 /// (the crate's splitter assumes a sane length field).
-fn split_glb(bytes: &[u8]) -> std::result::Result<(Vec<u8>, Option<Vec<u8>>), String> {
+pub(crate) fn split_glb(bytes: &[u8]) -> std::result::Result<(Vec<u8>, Option<Vec<u8>>), String> {
     if bytes.len() < 20 {
         return Err(format!(
             "truncated GLB: {} bytes, shorter than its headers",

@@ -31,11 +31,20 @@ pub fn dimensions(bytes: &[u8]) -> std::result::Result<(u32, u32), String> {
 /// from the header before any pixel is decoded, so a small file declaring a huge
 /// canvas is refused cheaply.
 fn decode(bytes: &[u8], expected: Option<(u32, u32)>) -> std::result::Result<DynamicImage, Refusal> {
-    if let Some(want) = expected {
-        let got = dimensions(bytes).map_err(Refusal::Decode)?;
-        if got != want {
-            return Err(Refusal::Size(got));
+    let got = dimensions(bytes).map_err(Refusal::Decode)?;
+    match expected {
+        Some(want) if got != want => return Err(Refusal::Size(got)),
+        // Without a camera's size (the importers), a canvas is held to the default
+        // `view_pixels` limit, from the header (a 72-byte PNG may declare a gigabyte).
+        None if got.0 as u64 * got.1 as u64 > crate::limits::Limits::DEFAULT.view_pixels => {
+            return Err(Refusal::Decode(format!(
+                "its header declares {}×{} pixels, more than the limit view_pixels of {}",
+                got.0,
+                got.1,
+                crate::limits::Limits::DEFAULT.view_pixels
+            )))
         }
+        _ => {}
     }
     let mut r = reader(bytes).map_err(Refusal::Decode)?;
     let mut limits = Limits::default();
@@ -272,6 +281,15 @@ mod tests {
         // Without a camera to compare with, the side limit refuses it.
         let e = decode_mask(&bomb, "v", "m.png").unwrap_err().to_string();
         assert!(e.contains("'m.png'"), "{e}");
+        // Within the side limit but over view_pixels (16384² RGBA would be 1 GiB; a
+        // fuzz target found it decoded): refused from the header, naming the limit.
+        let wide = png_header_only(16_384, 16_384);
+        for e in [
+            decode_image(&wide, "v", "i.png").unwrap_err().to_string(),
+            decode_mask(&wide, "v", "m.png").unwrap_err().to_string(),
+        ] {
+            assert!(e.contains("16384×16384") && e.contains("view_pixels"), "{e}");
+        }
         // The right size decodes.
         let ok = encode_gray(3, 2, &[0, 255, 0, 255, 0, 0]);
         assert_eq!(decode_mask_sized(&ok, "v", "m.png", 3, 2).unwrap().area(), 2);

@@ -15,6 +15,7 @@ mod limits;
 mod mesh_loading;
 mod metrics;
 mod objective;
+mod properties;
 #[cfg(feature = "softras")]
 mod soft_raster;
 
