@@ -315,6 +315,13 @@ test('examples: every other listed example loads with the views its scene.json n
     await page.waitForFunction((names) => [...document.querySelectorAll('.view .name')].map((n) => n.textContent).join() === names,
       scene.views.map((v) => v.name).join(), { timeout: 60_000 });
     await waitLoaded(page);
+    if (scene.views.some((v) => !v.mask)) {
+      // Photographs without masks: a step means loading the segmenter and segmenting
+      // first; tests/e2e/photos.test.mjs drives that path. Here: loaded, boxes shown.
+      await page.waitForFunction((n) => document.querySelectorAll('.view[data-shown]').length === n, scene.views.length);
+      console.log(`  ${e.id}: ${scene.views.length} views from photographs loaded, their boxes shown`);
+      continue;
+    }
     await byId(page, 'step').click();
     await page.waitForFunction(() => /search: [1-9]/.test(document.querySelector('[data-testid=status]').textContent));
     console.log(`  ${e.id}: ${scene.views.length} views loaded and stepped`);
