@@ -10,10 +10,11 @@ WB=${WB:-0.2.130}
 if ! rustup target list --installed | grep -qx wasm32-unknown-unknown; then
   rustup target add wasm32-unknown-unknown
 fi
-if ! command -v chromium >/dev/null || ! command -v chromedriver >/dev/null; then
+# Chromium and its driver for the browser tests; GNU time for scripts/bench-big.sh's peak RSS.
+if ! command -v chromium >/dev/null || ! command -v chromedriver >/dev/null || [ ! -x /usr/bin/time ]; then
   SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
   $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium chromium-driver >/dev/null
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium chromium-driver time >/dev/null
 fi
 if ! wasm-bindgen --version 2>/dev/null | grep -qx "wasm-bindgen $WB"; then
   cargo install wasm-bindgen-cli --version "$WB"

@@ -82,8 +82,11 @@ const handlers = {
   cameras: (msg) => showCorrections(msg),
   frame(msg) {
     photoState.marks = msg.marks;
-    if (state === 'running' && !msg.running) state = msg.progress.done ? 'done' : 'paused';
+    // The worker's state is the truth: a frame sent before a Start or Pause arrived
+    // (one in flight when the button was clicked) is put right by the next.
     if (msg.progress.done) state = 'done';
+    else if (msg.running) state = 'running';
+    else if (state === 'running') state = msg.progress.iteration === 0 && msg.progress.searched === 0 ? 'ready' : 'paused';
     showWorkers(msg.pool);
     if (!latest) requestAnimationFrame(paint);
     latest = msg;

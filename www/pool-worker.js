@@ -15,6 +15,7 @@ function build(files, views) {
   const set = new FileSet();
   try {
     for (const f of files) set.add(f.path, f.bytes);
+    set.setMasksOnly(true); // the images are only shown, by the coordinator
     shard?.free();
     shard = Shard.fromFiles(set, Uint32Array.from(views));
   } finally {

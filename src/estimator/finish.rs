@@ -256,16 +256,38 @@ impl Estimator {
         }
     }
 
-    /// Per-view figures at full resolution for a pose (kept for the final pose).
+    /// Per-view figures at full resolution for a pose (kept for the final pose; natively
+    /// the views in parallel).
     pub fn view_figures(&self, pose: &Pose) -> Vec<ViewFigures> {
         match self.done() {
             Some(f) if f.pose == *pose => f.views.clone(),
-            _ => self
-                .setup
-                .views
-                .iter()
-                .map(|v| view_figures(self.setup.mesh(), pose, v))
-                .collect(),
+            _ => self.per_view(|v| view_figures(self.setup.mesh(), pose, v)),
+        }
+    }
+
+    /// The full-resolution hard IoU of every view for a pose: [`Estimator::view_figures`]'s
+    /// `iou` without the contour distances, which cost more than the render on a large
+    /// image (what a progress report needs at every frame).
+    pub fn view_ious(&self, pose: &Pose) -> Vec<f64> {
+        match self.done() {
+            Some(f) if f.pose == *pose => f.views.iter().map(|v| v.iou).collect(),
+            _ => self.per_view(|v| {
+                let rendered = hard::render(self.setup.mesh(), pose, v.camera());
+                metrics::hard_iou_known(&rendered, v.mask(), v.ignore())
+            }),
+        }
+    }
+
+    /// `f` of every view, in order (natively on the machine's threads).
+    fn per_view<T: Send>(&self, f: impl Fn(&View) -> T + Sync) -> Vec<T> {
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            use rayon::prelude::*;
+            self.setup.views.par_iter().map(&f).collect()
+        }
+        #[cfg(target_arch = "wasm32")]
+        {
+            self.setup.views.iter().map(f).collect()
         }
     }
 

@@ -357,9 +357,9 @@ impl Estimator {
     }
 
     /// A snapshot of the state, with the full-resolution hard IoU of every view at the
-    /// current pose ([`Estimator::view_figures`]).
+    /// current pose ([`Estimator::view_ious`]).
     pub fn progress(&self) -> Progress {
-        let ious = self.view_figures(&self.pose()).iter().map(|f| f.iou).collect();
+        let ious = self.view_ious(&self.pose());
         self.snapshot(ious)
     }
 

@@ -42,6 +42,8 @@ pub enum FileRole {
 pub struct FileSet {
     files: Vec<(String, Vec<u8>)>,
     limits: Limits,
+    /// Leave out the images of views that have masks ([`FileSet::set_masks_only`]).
+    masks_only: bool,
 }
 
 /// What [`FileSet::plan`] found the files to be.
@@ -225,6 +227,14 @@ impl FileSet {
     /// Sets the limits of later loads.
     pub fn set_limits(&mut self, limits: Limits) {
         self.limits = limits;
+    }
+
+    /// Whether later loads leave out the images of views that have masks (default
+    /// `false`): what computes the fit without showing it (a page's pool Worker) needs
+    /// only the masks, and an image decoded costs four times its mask's memory. A view
+    /// without a mask still has its photograph.
+    pub fn set_masks_only(&mut self, on: bool) {
+        self.masks_only = on;
     }
 
     /// The number of files.
@@ -525,6 +535,9 @@ impl FileSet {
                 found.push((ignore.clone(), &entry.1));
             }
             let Some(image) = v.image.take() else { continue };
+            if self.masks_only && mask.is_some() {
+                continue;
+            }
             match self.find_entry(&join(dir, &image), FileRole::Image) {
                 Ok(Some(entry)) if mask.is_none_or(|m| !std::ptr::eq(entry, m)) => {
                     let key = if v.mask.as_ref() == Some(&image) {
@@ -755,6 +768,14 @@ mod tests {
         let (_, warnings, _) = masks_only.load().unwrap();
         assert_eq!(warnings.len(), 3);
         assert!(warnings[1].contains("view 'view1'") && warnings[1].contains("images/view1.png"));
+        // set_masks_only: the images given are left out (no warning), the masks the same.
+        let mut flat_masks = flat.clone();
+        flat_masks.set_masks_only(true);
+        let (lean, warnings, _) = flat_masks.load().unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        for (a, b) in lean.views.iter().zip(&scene.views) {
+            assert!(a.image().is_none() && a.mask() == b.mask(), "view {}", a.name());
+        }
     }
 
     #[test]

@@ -44,6 +44,14 @@ impl FileSet {
         Ok(())
     }
 
+    /// Whether later loads leave out the images of views that have masks (default
+    /// `false`): a pool Worker computes with the masks alone, and an image costs four
+    /// times its mask's memory.
+    #[wasm_bindgen(js_name = setMasksOnly)]
+    pub fn set_masks_only(&mut self, on: bool) {
+        self.0.set_masks_only(on);
+    }
+
     /// The limits as an object of numbers, keyed as `setLimit` names them.
     #[wasm_bindgen(getter)]
     pub fn limits(&self) -> JsValue {

@@ -15,8 +15,8 @@ use wasm_bindgen::prelude::*;
 use wasm_bindgen::Clamped;
 
 /// A fit in progress: the estimator, the time spent stepping it, the loss of every
-/// refinement iteration, and the views' figures at the current pose (cached until the
-/// next step).
+/// refinement iteration, and the views' IoUs and figures at the current pose (each
+/// cached until the next step).
 #[wasm_bindgen]
 pub struct Session {
     est: Estimator,
@@ -26,6 +26,7 @@ pub struct Session {
     losses: Vec<f64>,
     iteration: usize,
     figures: Option<Vec<ViewFigures>>,
+    ious: Option<Vec<f64>>,
     /// When the pending [`Session::request`] was made (`Date.now()`, ms), for the time
     /// a pool's step takes.
     requested_at: Option<f64>,
@@ -74,6 +75,7 @@ impl Session {
             losses: Vec::new(),
             iteration: 0,
             figures: None,
+            ious: None,
             requested_at: None,
             warnings: Vec::new(),
             grasps: Vec::new(),
@@ -94,6 +96,7 @@ impl Session {
             losses: Vec::new(),
             iteration: 0,
             figures: None,
+            ious: None,
             requested_at: None,
             warnings: Vec::new(),
             grasps,
@@ -139,6 +142,7 @@ impl Session {
             self.losses.push(p.loss);
         }
         self.figures = None;
+        self.ious = None;
     }
 
     /// The views' full-resolution figures at the current pose
@@ -148,9 +152,11 @@ impl Session {
         self.figures.get_or_insert_with(|| est.view_figures(&est.pose()))
     }
 
-    /// Full-resolution hard IoU per view at the current pose.
+    /// Full-resolution hard IoU per view at the current pose ([`Estimator::view_ious`]:
+    /// without the contour distances, which a frame does not show).
     pub fn full_ious(&mut self) -> Vec<f64> {
-        self.figures().iter().map(|f| f.iou).collect()
+        let est = &self.est;
+        self.ious.get_or_insert_with(|| est.view_ious(&est.pose())).clone()
     }
 
     fn progress_out(&mut self, p: &Progress) -> Result<JsValue, JsError> {
@@ -430,6 +436,7 @@ impl Session {
         self.losses.clear();
         self.iteration = 0;
         self.figures = None;
+        self.ious = None;
         self.requested_at = None;
         Ok(())
     }

@@ -184,6 +184,65 @@ fn hausdorff_of_offset_shapes_is_the_offset() {
     assert_eq!(metrics::mean_contour_distance_px(&a, &a), 0.0);
 }
 
+/// The contour distances by brute force over the whole image: every contour pixel of one
+/// mask against every one of the other.
+fn brute_contour_distance(a: &Mask, b: &Mask) -> (f64, f64) {
+    let pixels = |m: &Mask| {
+        let c = metrics::contour(m);
+        (0..m.height)
+            .flat_map(|y| (0..m.width).map(move |x| (x, y)))
+            .filter(|&(x, y)| c.get(x, y))
+            .collect::<Vec<_>>()
+    };
+    let (pa, pb) = (pixels(a), pixels(b));
+    let nearest = |p: (u32, u32), q: &[(u32, u32)]| {
+        q.iter()
+            .map(|&(x, y)| (f64::from(x) - f64::from(p.0)).hypot(f64::from(y) - f64::from(p.1)))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let d: Vec<f64> = pa
+        .iter()
+        .map(|&p| nearest(p, &pb))
+        .chain(pb.iter().map(|&p| nearest(p, &pa)))
+        .collect();
+    (
+        d.iter().copied().fold(0.0, f64::max),
+        d.iter().sum::<f64>() / d.len() as f64,
+    )
+}
+
+#[test]
+fn contour_distances_in_the_objects_box_equal_the_whole_images() {
+    // Random pairs of shapes, some touching the image's edges (where the border makes
+    // contour pixels) and some far apart (the box then spans most of the image).
+    use rand::Rng;
+    let mut rng = SmallRng::seed_from_u64(23);
+    for case in 0..60 {
+        let (w, h) = (rng.gen_range(8..48u32), rng.gen_range(8..40u32));
+        let shape = |rng: &mut SmallRng| {
+            let (x0, y0) = (rng.gen_range(0..w), rng.gen_range(0..h));
+            let (x1, y1) = (rng.gen_range(x0..w), rng.gen_range(y0..h));
+            if rng.gen_bool(0.5) {
+                rect(w, h, x0, y0, x1, y1)
+            } else {
+                disc(w, h, f64::from(x0), f64::from(y0), 1.0 + f64::from(x1 - x0) / 2.0)
+            }
+        };
+        let (a, b) = (shape(&mut rng), shape(&mut rng));
+        if a.area() == 0 || b.area() == 0 {
+            continue;
+        }
+        let got = metrics::contour_distance(&a, &b);
+        let (hausdorff, mean) = brute_contour_distance(&a, &b);
+        assert!(
+            close(got.hausdorff, hausdorff, 1e-12),
+            "case {case}: {} vs {hausdorff}",
+            got.hausdorff
+        );
+        assert!(close(got.mean, mean, 1e-12), "case {case}: {} vs {mean}", got.mean);
+    }
+}
+
 #[test]
 fn empty_masks_have_defined_figures() {
     let e = Mask::empty(20, 10);
