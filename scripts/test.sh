@@ -83,6 +83,7 @@ step "the examples a user learns from (examples/: a scene built in code, a scene
 step "the web page, end to end (Playwright + Chromium)" node tests/e2e/page.test.mjs
 step "the page's 3D view, end to end (Playwright + Chromium, WebGL on SwiftShader)" node tests/e2e/view3d.test.mjs
 step "the page from photographs and boxes, end to end (Playwright + Chromium: segmenter in Workers)" node tests/e2e/photos.test.mjs
+step "the page under abuse, end to end (Playwright + Chromium: loads racing, clicks mid-step, Workers ended)" node tests/e2e/abuse.test.mjs
 step "big input: eight 12-MP views and a 1-M-triangle mesh, fitted by the command line and in the page within its memory budget" \
   bash scripts/bench-big.sh
 step "the npm package (pkg-config/): build, npm pack, load in Node" \

@@ -1,6 +1,8 @@
 // The page: user interface only. The fit lives in worker.js; this file sends it the
 // user's files and commands and paints the frames it sends back (one canvas per
 // view, the loss curve, the pose, the status).
+import { lifelineName, watchLifeline, withLifeline } from './lifeline.js';
+
 const $ = (id) => document.getElementById(id);
 const ui = {
   drop: $('drop'), input: $('file-input'), example: $('load-example'), choice: $('example-choice'),
@@ -9,8 +11,10 @@ const ui = {
   verdict: $('verdict'), fullFrame: $('full-frame'), workers: $('workers'),
 };
 // `?pool=N`: a pool of N Workers computing the fit (0 or 1: the fit in one Worker);
-// without it the coordinator sizes the pool by the cores (worker.js).
+// `?segmenters=N`: N segmenter Workers (1–4); without them the coordinator sizes both
+// by the cores (worker.js).
 const poolParam = new URLSearchParams(location.search).get('pool');
+const segParam = new URLSearchParams(location.search).get('segmenters');
 
 let worker = null;
 let views = []; // [{ name, width, height, canvas, iou }]
@@ -23,10 +27,21 @@ let paints = []; // times of recent redraws while running, for the rate figure
 let paintCount = 0;
 
 // ---- worker -------------------------------------------------------------------
+// The scene last asked for (files chosen or dropped, or an example), so that a Worker
+// the browser ended can be replaced with the scene loaded again (once).
+let lastLoad = null; // { files: [{path, file}] } | { example: path }, and `loaded`, `retried`
+let loads = 0; // loads asked for: a slower earlier one (files still being read) is dropped
+let life = null; // the fit Worker's lifeline (lifeline.js): { name, stop }
+
 function startWorker() {
   const url = new URL('./worker.js', import.meta.url);
   if (poolParam !== null) url.searchParams.set('pool', poolParam);
-  worker = new Worker(url, { type: 'module' });
+  if (segParam !== null) url.searchParams.set('segmenters', segParam);
+  const name = lifelineName('fit');
+  worker = new Worker(withLifeline(url, name), { type: 'module' });
+  // Its end, however it comes, is seen (lifeline.js).
+  const me = (life = { name, stop: null });
+  me.stop = watchLifeline(name, () => me === life && workerDied());
   worker.onmessage = ({ data }) => handlers[data.type]?.(data);
   // A worker started again (after a trap) still knows the 3D view's shape.
   if (scene3dState.view) send('aspect3d', { aspect: scene3dState.view.aspect() });
@@ -38,9 +53,44 @@ function startWorker() {
   };
 }
 
+// Replaces the Worker on purpose (its instance is not to be trusted after a trap).
+function restartWorker() {
+  life?.stop();
+  worker.terminate();
+  buildViews([]);
+  state = 'empty';
+  startWorker();
+}
+
+// The fit's Worker ended without a word (the browser stopped it: out of memory, a
+// crash, the tab's Workers killed): a new one is started and the last scene loaded
+// again, once; the reason stays on the page.
+function workerDied() {
+  const again = lastLoad?.loaded && !lastLoad.retried;
+  const message = `The fit's Worker stopped without a word (the browser ended it: out of memory, or a crash). ${
+    again ? 'A new one has the scene loaded again: press Start to fit it.' : 'A new one is ready: load the scene again.'}`;
+  worker.terminate();
+  buildViews([]);
+  state = 'empty';
+  photoState.on = false;
+  latest = null;
+  startWorker();
+  updateButtons();
+  showError(message);
+  if (again) {
+    lastLoad.retried = true;
+    kept = message;
+    load(lastLoad);
+  }
+}
+let kept = null; // an error to show again once the scene is loaded again
+
 const handlers = {
   loaded(msg) {
     clearError();
+    if (kept) showError(kept);
+    kept = null;
+    if (lastLoad) lastLoad.loaded = true;
     ui.notice.textContent = msg.warnings.join('\n');
     ui.notice.hidden = msg.warnings.length === 0;
     photoState.on = Boolean(msg.photo);
@@ -105,13 +155,7 @@ const handlers = {
   error(msg) {
     showError(msg.message);
     if (state === 'running') state = 'paused';
-    if (msg.fatal) {
-      // A trap inside wasm: start afresh rather than trust the old instance.
-      worker.terminate();
-      buildViews([]);
-      state = 'empty';
-      startWorker();
-    }
+    if (msg.fatal) restartWorker(); // a trap inside wasm: start afresh rather than trust the old instance
     updateButtons();
   },
 };
@@ -119,14 +163,28 @@ const handlers = {
 const send = (type, extra = {}, transfer = []) => worker.postMessage({ type, ...extra }, transfer);
 
 // ---- files --------------------------------------------------------------------
+// Loads a scene: { files: [{path, file}] } (read here, then handed to the Worker) or
+// { example: path }. The latest asked for wins: files still being read when another
+// load is asked for are dropped.
+async function load(what) {
+  const me = ++loads;
+  lastLoad = what;
+  if (what.example !== undefined) {
+    send('example', { path: what.example });
+    return;
+  }
+  ui.status.textContent = `reading ${what.files.length} file(s)…`;
+  const files = await Promise.all(
+    what.files.map(async ({ path, file }) => ({ path, bytes: new Uint8Array(await file.arrayBuffer()) })),
+  );
+  if (me !== loads) return;
+  send('load', { files }, files.map((f) => f.bytes.buffer));
+}
+
 async function sendFiles(list) {
   clearError();
   if (list.length === 0) return;
-  ui.status.textContent = `reading ${list.length} file(s)…`;
-  const files = await Promise.all(
-    list.map(async ({ path, file }) => ({ path, bytes: new Uint8Array(await file.arrayBuffer()) })),
-  );
-  send('load', { files }, files.map((f) => f.bytes.buffer));
+  await load({ files: list });
 }
 
 // Every file under a dropped entry, with its folder-relative path.
@@ -189,7 +247,7 @@ listExamples().catch((e) => {
 ui.example.addEventListener('click', () => {
   clearError();
   ui.status.textContent = `loading the example ${ui.choice.selectedOptions[0]?.text ?? ''}…`;
-  send('example', { path: ui.choice.value });
+  load({ example: ui.choice.value });
 });
 ui.start.addEventListener('click', () => {
   clearError();

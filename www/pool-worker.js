@@ -7,6 +7,10 @@
 // [indices it owns]}, work {id, request}.
 // Messages out: ready {views}, done {id, response}, error {id?, message}.
 import init, { FileSet, Shard } from './pkg/localisebot.js';
+import { holdLifeline } from './lifeline.js';
+
+// Its end is watched by the coordinator through a lock it holds (lifeline.js).
+holdLifeline();
 
 let ready = null; // wasm instantiated, at the first init
 let shard = null;
@@ -30,7 +34,8 @@ onmessage = async ({ data }) => {
     if (!ready) throw new Error('pool worker: work before init');
     await ready;
     if (data.type === 'init') {
-      postMessage({ type: 'ready', views: build(data.files, data.views) });
+      const views = build(data.files, data.views);
+      postMessage({ type: 'ready', views });
     } else if (data.type === 'work') {
       if (!shard) throw new Error('pool worker: work before init');
       postMessage({ type: 'done', id: data.id, response: shard.work(data.request) });

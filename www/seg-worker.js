@@ -10,6 +10,10 @@
 // Messages out: ready {ms}, encoded {ids, count, ms}, done {id, answer: {count,
 // preferred, masks, logits, scores, ms}}, error {id?, ids?, message}.
 import init, { Segmenter } from './pkg-segment/localisebot_segment.js';
+import { holdLifeline } from './lifeline.js';
+
+// Its end is watched by the coordinator through a lock it holds (lifeline.js).
+holdLifeline();
 
 let segmenter = null;
 

@@ -19,6 +19,10 @@
 // error until the next load) the Session steps here, with stepFor.
 import init, { FileSet, Session, PhotoSession, sceneFiles, meshFiles, framesOfCameras } from './pkg/localisebot.js';
 import { Segmenters } from './photo.js';
+import { holdLifeline, lifelineName, watchLifeline, withLifeline } from './lifeline.js';
+
+// The page watches this Worker's end through a lock it holds (lifeline.js).
+holdLifeline();
 
 const BUDGET_MS = 30; // work per frame: about 30 frames a second while fitting
 const WINDOW_PX = 256; // side of an object-window overlay
@@ -106,6 +110,7 @@ class Pool {
     this.pending = new Map(); // id → { ok, fail }
     this.nextId = 0;
     this.broken = null;
+    this.unwatch = []; // per worker: stops watching its lifeline
   }
 
   static async start(n, files, viewCount) {
@@ -117,8 +122,16 @@ class Pool {
         const timer = setTimeout(() => fail(new Error(`the pool did not start within ${POOL_START_MS / 1000} s`)),
           POOL_START_MS);
         for (let i = 0; i < n; i++) {
-          const w = new Worker(new URL('./pool-worker.js', import.meta.url), { type: 'module' });
+          const life = lifelineName('pool');
+          const w = new Worker(withLifeline(new URL('./pool-worker.js', import.meta.url), life), { type: 'module' });
           pool.workers.push(w);
+          // Its end, from when it holds its lifeline, fails the start or breaks the pool.
+          pool.unwatch.push(watchLifeline(life, () => {
+            const e = new Error(`pool worker ${i} stopped without a word (the browser ended it: out of memory, or a crash)`);
+            clearTimeout(timer);
+            fail(e);
+            pool.breaks(e);
+          }));
           const views = [];
           for (let v = i; v < viewCount; v += n) views.push(v);
           w.onmessage = ({ data }) => {
@@ -184,6 +197,7 @@ class Pool {
   }
 
   terminate() {
+    for (const stop of this.unwatch) stop();
     for (const w of this.workers) w.terminate();
     this.breaks(new Error('the pool was stopped'));
   }
@@ -335,11 +349,25 @@ async function run() {
   }
 }
 
+// Loads asked for: an example still being fetched when another load is asked for is
+// dropped (the latest wins), and so is its error.
+let loads = 0;
+
 const handlers = {
-  load: (msg) => exclusive(() => load(msg.files)),
+  load: (msg) => {
+    loads++;
+    return exclusive(() => load(msg.files));
+  },
   example: async (msg) => {
-    const list = await example(msg.path);
-    await exclusive(() => load(list));
+    const me = ++loads;
+    let list;
+    try {
+      list = await example(msg.path);
+    } catch (e) {
+      if (me === loads) throw e;
+      return;
+    }
+    if (me === loads) await exclusive(() => load(list));
   },
   start: () => {
     if (running) return;
@@ -521,12 +549,14 @@ function loadedPhotos() {
 const warmed = new Set();
 function warm() {
   if (!photo || photo.started) return;
-  const jobs = [...photo.warmJobs()].filter((j) => !warmed.has(`${j.view}:${j.side}:${j.box}`));
+  const key = (j) => `${j.view}:${j.side}:${j.box}`;
+  const jobs = [...photo.warmJobs()].filter((j) => !warmed.has(key(j)));
   if (jobs.length === 0) return;
-  for (const j of jobs) warmed.add(`${j.view}:${j.side}:${j.box}`);
+  const keys = jobs.map(key); // made now: the jobs' buffers go to the segmenter
+  for (const k of keys) warmed.add(k);
   startSegmenters(photo.views().filter((v) => !v.has_mask).length)
     .then((pool) => pool.segment(jobs))
-    .catch(() => jobs.forEach((j) => warmed.delete(`${j.view}:${j.side}:${j.box}`)));
+    .catch(() => keys.forEach((k) => warmed.delete(k)));
 }
 
 function postBoxes() {
@@ -539,12 +569,23 @@ function startSegmenters(photos) {
     const cores = navigator.hardwareConcurrency || 1;
     const wanted = segParam === null ? cores : Number.parseInt(segParam, 10) || 1;
     const n = Math.max(1, Math.min(wanted, photos, MAX_SEGMENTERS));
-    segmenters = Segmenters.start(n, (text) => post({ type: 'segmenting', text, done: 0, total: 0 }));
-    segmenters.catch(() => {
-      segmenters = null; // tried again at the next start
-    });
+    const started = Segmenters.start(n, (text) => post({ type: 'segmenting', text, done: 0, total: 0 }));
+    segmenters = started;
+    // A pool that failed to start, or broke later (a Worker ended), is started again next time.
+    const forget = () => {
+      if (segmenters === started) segmenters = null;
+    };
+    started.then((pool) => {
+      pool.onBroken = forget;
+    }, forget);
   }
   return segmenters;
+}
+
+// Ends the segmenter pool (the next segmentation starts a new one).
+function stopSegmenters() {
+  segmenters?.then((pool) => pool.terminate(), () => {});
+  segmenters = null;
 }
 
 // Canvas pixel (x, y) of view `view`'s overlay → image pixel.
@@ -579,7 +620,21 @@ function resumeIfAsked() {
 let timings = [];
 const mark = (what, t0) => timings.push([what, Number(((performance.now() - t0) / 1000).toFixed(2))]);
 
-async function segmentJobs(jobs) {
+// `makeJobs()` gives the jobs (photo.jobs(): their buffers go to the Workers); a pool
+// broken because one of its Workers ended (out of memory, a crash) is started again and
+// the round's jobs made and sent again, once: a second end is the round's error.
+async function segmentJobs(makeJobs) {
+  try {
+    return await segmentOnce(makeJobs());
+  } catch (e) {
+    if (!e?.ended) throw e;
+    post({ type: 'segmenting', text: `${e.message}: starting the segmenter again`, done: 0, total: 0 });
+    stopSegmenters();
+    return segmentOnce(makeJobs());
+  }
+}
+
+async function segmentOnce(jobs) {
   const tStart = performance.now();
   const pool = await startSegmenters(jobs.length);
   mark('segmenter ready', tStart);
@@ -629,7 +684,12 @@ async function runPhoto() {
           if (session) frame();
           break;
         }
-        const answers = await segmentJobs(jobs);
+        let fresh = jobs; // the jobs made above, then (after a segmenter's end) made again
+        const answers = await segmentJobs(() => {
+          const made = fresh ?? photo.jobs();
+          fresh = null;
+          return made;
+        });
         if (me !== runs || !photo) return; // a new scene was loaded meanwhile
         await exclusive(() => {
           const first = !session;
