@@ -631,16 +631,31 @@ impl PhotoFit {
             self.state = State::Done;
             return Ok(());
         }
+        // How much the fit trusts each view: doubted by the verdict, its robust weight,
+        // its IoU at the pose (a view that sat the round out: not at all).
         let doubted: Vec<String> = judgement.map(|j| j.doubted_views).unwrap_or_default();
+        let weights = fitted.view_weights().map(<[f64]>::to_vec).unwrap_or_default();
+        let figures = fitted.view_figures(&pose);
+        let trust = |name: &str| -> (bool, f64, f64) {
+            match fitted.views().iter().position(|v| v.name() == name) {
+                Some(k) => (
+                    !doubted.iter().any(|d| d == name),
+                    weights.get(k).copied().unwrap_or(1.0),
+                    figures.get(k).map_or(0.0, |f| f.iou),
+                ),
+                None => (false, 0.0, 0.0),
+            }
+        };
         let margin = self.photo.crop_margin;
         let mut jobs = Vec::new();
         for (i, s) in self.slots.iter_mut().enumerate() {
             let Slot::Made(m) = s else { continue };
-            let job = reprompt(&self.mesh, &pose, i, m, margin);
-            jobs.push((doubted.contains(&m.photo.name), job));
+            let t = trust(&m.photo.name);
+            jobs.push((t, reprompt(&self.mesh, &pose, i, m, margin)));
         }
-        // The views the fit doubts first.
-        jobs.sort_by_key(|(doubted, _)| !doubted);
+        // The views the fit doubts first: named by the verdict, then by robust weight,
+        // then by IoU, least trusted first.
+        jobs.sort_by(|(a, _), (b, _)| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.total_cmp(&b.2)));
         self.pending = jobs.into_iter().map(|(_, j)| j).collect();
         self.state = State::Segment;
         Ok(())
@@ -1007,6 +1022,61 @@ mod tests {
             "the other views were not asked"
         );
         assert!(metrics::pose_errors(fit_mesh(&fit), &est2.pose(), &est.pose()).add_rel < 0.01);
+    }
+
+    /// Answers with the true silhouette, but in the first round view 2's is moved 30
+    /// pixels right (a segmenter that took the wrong object).
+    struct Misplaced {
+        truth: Vec<Mask>,
+        calls: usize,
+    }
+
+    impl Segmenter for Misplaced {
+        fn segment(&mut self, jobs: &[SegmentJob], _: &[&Rgba]) -> Result<Vec<SegmentOutput>> {
+            self.calls += 1;
+            Ok(jobs
+                .iter()
+                .map(|j| {
+                    let mut m = self.truth[j.view].clone();
+                    if self.calls == 1 && j.view == 2 {
+                        let (w, h) = (m.width, m.height);
+                        let moved: Vec<u8> = (0..w * h)
+                            .map(|i| {
+                                let (x, y) = (i % w, i / w);
+                                if x >= 30 {
+                                    self.truth[j.view].data[(y * w + x - 30) as usize]
+                                } else {
+                                    0
+                                }
+                            })
+                            .collect();
+                        m.data = moved;
+                    }
+                    SegmentOutput::single(in_crop(&m, j.crop), vec![0.0; 16], 0.9)
+                })
+                .collect())
+        }
+    }
+
+    #[test]
+    fn the_views_the_fit_doubts_are_segmented_again_first() {
+        let (scene, truth) = scene();
+        let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
+        let mut seg = Misplaced { truth, calls: 0 };
+        // After each round's fit: its verdict's doubted views, the next round's jobs' order.
+        let mut seen: Vec<(Vec<String>, Vec<usize>)> = Vec::new();
+        run(&mut fit, &mut seg, |f, est| {
+            if est.is_done() && !f.is_fitting() && !f.is_done() {
+                let doubted = est.judgement().map(|j| j.doubted_views.clone()).unwrap_or_default();
+                seen.push((doubted, f.pending().iter().map(|j| j.view).collect()));
+            }
+        })
+        .unwrap();
+        // Round 1's fit cannot explain view 2's mask (a failed verdict names no view; its
+        // IoU and weight are the lowest): view 2 is asked first, the others after it.
+        let (_, order) = seen.first().expect("a second round");
+        assert_eq!(order.first(), Some(&2), "the misplaced view is asked first: {seen:?}");
+        assert_eq!(order.len(), 3, "the others are asked too: {seen:?}");
     }
 
     fn fit_mesh(fit: &PhotoFit) -> &Mesh {
