@@ -80,7 +80,7 @@ function workerDied() {
   if (again) {
     lastLoad.retried = true;
     kept = message;
-    load(lastLoad);
+    load(lastLoad).catch((e) => showError(`${message} Loading it again failed: ${e.message}`));
   }
 }
 let kept = null; // an error to show again once the scene is loaded again
