@@ -9,8 +9,9 @@
 
 use crate::data;
 use localisebot::io::bop::{self, BopOptions, BoxHints, MaskKind};
+use localisebot::raster::hard;
 use localisebot::segment::{self, PhotoFit, PhotoSettings, SamSegmenter};
-use localisebot::{load_scene, metrics, FitSettings, Mask, Scene, Verdict};
+use localisebot::{load_scene, metrics, Camera, FitSettings, Mask, Pose, Scene, Verdict};
 
 /// The views of `real.rs`, and whether the object is symmetric (ADD-S).
 const SETS: [(u32, [u32; 3], bool); 8] = [
@@ -66,6 +67,49 @@ fn ious(photo: &PhotoFit, annotated: &[Mask]) -> Vec<f64> {
         .collect()
 }
 
+/// The best IoU of `made` moved by up to `reach` pixels onto `annotated` (what leaves
+/// the image is lost), and the move.
+fn best_shift_iou(made: &Mask, annotated: &Mask, reach: i32) -> (f64, (i32, i32)) {
+    let (w, h) = (made.width as i32, made.height as i32);
+    let pixels: Vec<(i32, i32)> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .filter(|&(x, y)| made.get(x as u32, y as u32))
+        .collect();
+    let area_b = annotated.area() as f64;
+    let mut best = (0.0, (0, 0));
+    for dy in -reach..=reach {
+        for dx in -reach..=reach {
+            let (mut inside, mut both) = (0.0, 0.0);
+            for &(x, y) in &pixels {
+                let (sx, sy) = (x + dx, y + dy);
+                if sx >= 0 && sy >= 0 && sx < w && sy < h {
+                    inside += 1.0;
+                    if annotated.get(sx as u32, sy as u32) {
+                        both += 1.0;
+                    }
+                }
+            }
+            let union = inside + area_b - both;
+            let iou = if union > 0.0 { both / union } else { 0.0 };
+            if iou > best.0 || (iou == best.0 && (dx, dy) == (0, 0)) {
+                best = (iou, (dx, dy));
+            }
+        }
+    }
+    best
+}
+
+/// How well a pose explains the made masks: each view's IoU between the pose's
+/// silhouette and the made mask (the silhouette is whole, the masks are of the visible
+/// part: occlusion lowers both poses' figures alike).
+fn explains(mesh: &localisebot::Mesh, pose: &Pose, cameras: &[Camera], made: &[Option<&Mask>]) -> Vec<f64> {
+    cameras
+        .iter()
+        .zip(made)
+        .map(|(c, m)| m.map_or(0.0, |m| metrics::hard_iou(&hard::render(mesh, pose, c), m)))
+        .collect()
+}
+
 /// One fit's figures.
 struct Outcome {
     /// ADD (ADD-S for the symmetric objects) over the diameter.
@@ -73,6 +117,13 @@ struct Outcome {
     /// The made masks' IoU against the annotated visible masks.
     mask_ious: Vec<f64>,
     verdict: Option<Verdict>,
+    /// The made masks' IoU against the annotated ones, each moved first by up to 10 px
+    /// to where it fits best.
+    shifted_ious: Vec<f64>,
+    /// The fitted pose's silhouettes against the made masks (per view).
+    fitted_explains: Vec<f64>,
+    /// The annotated pose's silhouettes against the made masks (per view).
+    truth_explains: Vec<f64>,
 }
 
 fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, with_box: usize) -> Outcome {
@@ -91,6 +142,7 @@ fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, wit
     let truth = scene.ground_truth_pose.unwrap();
     let mesh = scene.mesh.clone();
     assert_eq!(scene.photos.len(), 3);
+    let cameras: Vec<Camera> = scene.photos.iter().map(|p| p.camera).collect();
     let t0 = std::time::Instant::now();
     let mut photo = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
     // The made masks' median IoU against the annotated ones after each segmentation.
@@ -107,6 +159,15 @@ fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, wit
     let e = metrics::pose_errors(&mesh, &pose, &truth);
     let add = if symmetric { e.add_s_rel } else { e.add_rel };
     let mask_ious = ious(&photo, &annotated);
+    let made: Vec<Option<&Mask>> = photo.masks().into_iter().map(|(_, m)| m).collect();
+    let fitted_explains = explains(&mesh, &pose, &cameras, &made);
+    let truth_explains = explains(&mesh, &truth, &cameras, &made);
+    let best: Vec<(f64, (i32, i32))> = made
+        .iter()
+        .zip(&annotated)
+        .map(|(m, a)| m.map_or((0.0, (0, 0)), |m| best_shift_iou(m, a, 10)))
+        .collect();
+    let r3 = |v: &[f64]| v.iter().map(|x| (x * 1000.0).round() / 1000.0).collect::<Vec<_>>();
     println!(
         "LM-O object {object} {images:?}, boxes in {}: ADD{} {:.2} % d, rotation {:.1}°, masks' IoU {:?} \
          (median by round {by_round:?}), verdict {:?}, {secs:.1} s",
@@ -120,20 +181,56 @@ fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, wit
             .collect::<Vec<_>>(),
         result.verdict
     );
+    println!(
+        "    made masks' IoU moved onto the annotation {:?} by {:?}; the made masks explained by \
+         the fitted pose {:?}, by the annotated pose {:?}",
+        r3(&best.iter().map(|b| b.0).collect::<Vec<_>>()),
+        best.iter().map(|b| b.1).collect::<Vec<_>>(),
+        r3(&fitted_explains),
+        r3(&truth_explains)
+    );
     Outcome {
         add,
         mask_ious,
         verdict: result.verdict,
+        shifted_ious: best.iter().map(|b| b.0).collect(),
+        fitted_explains,
+        truth_explains,
     }
 }
 
-/// (fraction within 0.1 d, median ADD(-S) / d, median mask IoU, verdicts ok)
-fn summary(what: &str, outcomes: &[Outcome]) -> (f64, f64, f64, usize) {
+/// The summary figures of a set of fits.
+struct Summary {
+    /// Fraction within ADD(-S) < 0.1 d.
+    within: f64,
+    /// Median ADD(-S) / d.
+    add: f64,
+    /// The made masks' median IoU against the annotated ones.
+    iou: f64,
+    /// The same, each made mask moved first (up to 10 px) to where it fits best.
+    shifted_iou: f64,
+    /// The made masks' median IoU with the fitted pose's silhouettes.
+    fitted_explains: f64,
+    /// The made masks' median IoU with the annotated pose's silhouettes.
+    truth_explains: f64,
+}
+
+fn summary(what: &str, outcomes: &[Outcome]) -> Summary {
     let within = outcomes.iter().filter(|o| o.add < 0.1).count() as f64 / outcomes.len() as f64;
     let median_add = metrics::median(&outcomes.iter().map(|o| o.add).collect::<Vec<_>>());
     let ious: Vec<f64> = outcomes.iter().flat_map(|o| o.mask_ious.iter().copied()).collect();
     let median_iou = metrics::median(&ious);
     let ok = outcomes.iter().filter(|o| o.verdict == Some(Verdict::Ok)).count();
+    let all = |f: fn(&Outcome) -> &Vec<f64>| -> f64 {
+        metrics::median(&outcomes.iter().flat_map(|o| f(o).iter().copied()).collect::<Vec<_>>())
+    };
+    println!(
+        "{what}: masks' median IoU moved by up to 10 px onto the annotation {:.3}; the made masks' \
+         median IoU with the fitted pose's silhouettes {:.3}, with the annotated pose's {:.3}",
+        all(|o| &o.shifted_ious),
+        all(|o| &o.fitted_explains),
+        all(|o| &o.truth_explains)
+    );
     println!(
         "{what}: {:.0} % within ADD(-S) < 0.1 d, median ADD(-S) {:.2} % d, masks' median IoU {:.3}, {ok}/{} ok",
         100.0 * within,
@@ -141,7 +238,14 @@ fn summary(what: &str, outcomes: &[Outcome]) -> (f64, f64, f64, usize) {
         median_iou,
         outcomes.len()
     );
-    (within, median_add, median_iou, ok)
+    Summary {
+        within,
+        add: median_add,
+        iou: median_iou,
+        shifted_iou: all(|o| &o.shifted_ious),
+        fitted_explains: all(|o| &o.fitted_explains),
+        truth_explains: all(|o| &o.truth_explains),
+    }
 }
 
 #[test]
@@ -155,13 +259,36 @@ fn lmo_from_photographs_and_boxes() {
         .iter()
         .map(|&(o, ims, sym)| fit(&mut sam, o, &ims, sym, 2))
         .collect();
-    let (within3, add3, iou3, _) = summary("boxes in 3 views", &three);
-    let (within2, _, _, _) = summary("boxes in 2 views", &two);
+    let s3 = summary("boxes in 3 views", &three);
+    let s2 = summary("boxes in 2 views", &two);
+    let (within3, add3, iou3, within2) = (s3.within, s3.add, s3.iou, s2.within);
     // Measured (this machine, these seeds; crops of 1.3× the box, four to an encoder
     // run as 512² tiles): boxes in 3 views 100 % within 0.1 d, median ADD(-S) 4.4 % d,
-    // masks' median IoU 0.806 against the annotated masks (which sit 1–8 px off the
-    // photographs' objects in several views); boxes in 2 views 88 %, median 4.6 % d.
-    // The bars are regression bars, not the issue's targets (≥ 90 %, ≤ 2 %, ≥ 0.9).
+    // masks' median IoU 0.806 against the annotated masks; boxes in 2 views 88 %,
+    // median 5.1 % d. The bars are regression bars, not the issue's targets (≥ 90 %,
+    // ≤ 2 %, ≥ 0.9).
+    //
+    // The annotation is not the photographs' truth at that precision: the made masks
+    // move 0–8 px onto the annotated ones (median IoU 0.806 -> 0.877, measured), a
+    // shift in a different direction per view that no segmenter makes, and the fitted
+    // pose explains the made masks better than the annotated pose does (median IoU
+    // 0.897 against 0.805 with boxes in 3 views). Asserted, so that a fit that stops
+    // following the photographs fails here.
+    for (what, s) in [("boxes in 3 views", &s3), ("boxes in 2 views", &s2)] {
+        assert!(
+            s.fitted_explains >= 0.85 && s.fitted_explains > s.truth_explains + 0.04,
+            "{what}: the made masks' median IoU with the fitted silhouettes {:.3}, with the annotated \
+             pose's {:.3}",
+            s.fitted_explains,
+            s.truth_explains
+        );
+        assert!(
+            s.shifted_iou > s.iou + 0.03,
+            "{what}: the made masks' median IoU moved onto the annotation {:.3}, unmoved {:.3}",
+            s.shifted_iou,
+            s.iou
+        );
+    }
     assert!(
         within3 >= 0.85,
         "boxes in 3 views: {:.0} % within 0.1 d",
