@@ -2,8 +2,9 @@
 // example lmo-duck-photos, three Linemod-Occluded views of the duck with boxes on two),
 // a box dragged on the third, the segmenter's module and weights loaded in the page's
 // Workers (www/pkg-segment/ and www/models/ from scripts/build-segmenter.sh), rounds of
-// segmenting and fitting to verdict ok, a click that corrects a view; and the errors: a
-// missing or altered weights file, a box off its photograph. Needs www/pkg/, the
+// segmenting and fitting to a right pose (verdict ok, or ambiguous naming its rival), a
+// click that corrects a view; and the errors: a missing or altered weights file, a box
+// off its photograph. Needs www/pkg/, the
 // examples (scripts/build-examples.sh, with ../shared beside the repository) and the
 // segmenter (scripts/build-segmenter.sh). Timings are printed, never asserted.
 //
@@ -63,7 +64,7 @@ async function downloadResult(page, name) {
 
 const done = () => document.querySelector('[data-testid=status]').textContent.startsWith('done');
 
-test('photographs: boxes on two views, the third proposed then dragged; Start segments and fits to verdict ok; the masks are in the result; a click corrects a view', async () => {
+test('photographs: boxes on two views, the third proposed then dragged; Start segments and fits it right (verdict ok, or ambiguous with its rival named); the masks are in the result; a click corrects a view', async () => {
   const page = await openPage();
   const shown = await loadExample(page);
   assert.deepEqual(shown.map((s) => s.kind), ['given', 'given', 'proposed'], JSON.stringify(shown));
