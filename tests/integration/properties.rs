@@ -4,7 +4,7 @@
 //! 1e300, denormals, −0, the limits' bounds), meshes as PLY (ASCII and binary, any
 //! scalar types), OBJ and glTF (GLB, data URI, external buffer; by hand and by the
 //! project's writers), PNG masks and images of every pixel format, BOP and NeRF
-//! folders, the files a page drops — serialise them (`fuzz/src/formats.rs`, shared with
+//! folders, the files a page drops — serialise them (`fuzz/src/formats/`, shared with
 //! the fuzz targets), damage the bytes (bit flips, cuts, insertions), and feed the entry
 //! points the CLI and the wasm binding use. Every input must give `Ok` or a clean
 //! `Err`: never a panic or a hang; an `Ok` is checked (finite numbers, indices in range,
@@ -17,7 +17,7 @@
 //! they and the fuzz targets found are fixed, each with a regression test in its
 //! reader's module and its input in `fuzz/regressions/`.
 
-#[path = "../../fuzz/src/formats.rs"]
+#[path = "../../fuzz/src/formats/mod.rs"]
 mod formats;
 
 use formats::*;
