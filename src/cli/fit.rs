@@ -423,5 +423,11 @@ fn report(
             }
         );
     }
+    if let Some(b) = super::peak_memory_bytes() {
+        eprintln!(
+            "  peak memory: {} MB (the process's resident set at its largest)",
+            b / (1 << 20)
+        );
+    }
     Ok(if a.strict && verdict != Verdict::Ok { NOT_OK } else { 0 })
 }

@@ -69,6 +69,24 @@ enum Command {
     },
 }
 
+/// The process's peak resident memory in bytes (`VmHWM` of `/proc/self/status`), where
+/// the system says it (Linux); `None` elsewhere.
+pub(crate) fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    parse_vm_hwm(&status)
+}
+
+/// `VmHWM:   123456 kB` of a `/proc/<pid>/status` text, in bytes.
+fn parse_vm_hwm(status: &str) -> Option<u64> {
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let mut words = line["VmHWM:".len()..].split_whitespace();
+    let n: u64 = words.next()?.parse().ok()?;
+    match words.next()? {
+        "kB" => n.checked_mul(1024),
+        _ => None,
+    }
+}
+
 /// Runs the command line; returns the process exit status.
 pub fn main() -> i32 {
     let cli = Cli::parse();
@@ -94,5 +112,22 @@ pub fn main() -> i32 {
             eprintln!("error: {e}");
             1
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_vm_hwm;
+
+    #[test]
+    fn the_peak_memory_is_read_from_vm_hwm() {
+        let status = "Name:\tlocalisebot\nVmPeak:\t  900 kB\nVmHWM:\t  1329024 kB\nVmRSS:\t 12 kB\n";
+        assert_eq!(parse_vm_hwm(status), Some(1_329_024 * 1024));
+        assert_eq!(parse_vm_hwm("VmRSS:\t 12 kB\n"), None);
+        assert_eq!(parse_vm_hwm("VmHWM:\t twelve kB\n"), None);
+        assert_eq!(parse_vm_hwm("VmHWM:\t 12 MB\n"), None);
+        // The process's own: some memory, read back on Linux.
+        #[cfg(target_os = "linux")]
+        assert!(super::peak_memory_bytes().is_some_and(|b| b > 1024 * 1024));
     }
 }

@@ -151,6 +151,18 @@ fn synth_render_fit_and_loss_work_together() {
         d.join("fit").to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // The fit says its peak memory (Linux: the process's VmHWM), a plausible size.
+    #[cfg(target_os = "linux")]
+    {
+        let log = stderr(&o);
+        let mb: u64 = log
+            .split("peak memory: ")
+            .nth(1)
+            .and_then(|t| t.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no peak memory in: {log}"));
+        assert!((1..4096).contains(&mb), "peak memory {mb} MB");
+    }
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("result.json")).unwrap()).unwrap();
     for k in ["pose", "matrix", "views", "loss_history", "seconds", "errors"] {
         assert!(r.get(k).is_some(), "result lacks {k}");
