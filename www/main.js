@@ -132,11 +132,13 @@ const handlers = {
   cameras: (msg) => showCorrections(msg),
   frame(msg) {
     photoState.marks = msg.marks;
-    // The worker's state is the truth: a frame sent before a Start or Pause arrived
-    // (one in flight when the button was clicked) is put right by the next.
+    // The worker's state is the truth: a frame sent before a Start, Pause or Reset
+    // arrived (one in flight when the button was clicked) is put right by the next; a
+    // stopped fit is ready at its start, else paused, whatever frames came before.
+    const atStart = msg.progress.iteration === 0 && msg.progress.searched === 0;
     if (msg.progress.done) state = 'done';
     else if (msg.running) state = 'running';
-    else if (state === 'running') state = msg.progress.iteration === 0 && msg.progress.searched === 0 ? 'ready' : 'paused';
+    else if (['running', 'paused', 'ready'].includes(state)) state = atStart ? 'ready' : 'paused';
     showWorkers(msg.pool);
     if (!latest) requestAnimationFrame(paint);
     latest = msg;

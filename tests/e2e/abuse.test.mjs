@@ -131,8 +131,11 @@ test('Reset, Start, Step and Pause clicked mid-step, fast: no stuck state, and t
       await page.waitForTimeout(round * 40);
     }
   }
-  // The last click was Reset: the fit is back at its start and stays there.
-  await waitFor(page, () => document.querySelector('[data-testid=status]').textContent.startsWith('ready'));
+  // The last click was Reset: the fit is back at its start and stays there (once, a
+  // stale frame left it 'paused' at 0/512: the page now follows the worker's last frame).
+  await waitFor(page, () => document.querySelector('[data-testid=status]').textContent.startsWith('ready')).catch(async (e) => {
+    throw new Error(`${e.message}; status: ${await status(page)}; buttons ${JSON.stringify(await buttons(page))}`);
+  });
   await stays(page, 1500);
   assert.match(await status(page), /^ready — search: 0\//);
   assert.deepEqual(await buttons(page), { start: true, pause: false, step: true, reset: true, download: true });
