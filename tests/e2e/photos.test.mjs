@@ -140,7 +140,7 @@ function exampleFiles(edit = (s) => s) {
   return files;
 }
 
-test('photographs, errors: a box off its photograph is named on load; missing and altered weights are named at Start, and Start works once they are back', async () => {
+test('photographs, errors: a box off its photograph is named on load; missing and altered weights are named at Start, and Start works once they are back (the example as it comes, to verdict ok)', async () => {
   const page = await openPage();
   await byId(page, 'file-input').setInputFiles(exampleFiles((s) => {
     s.views[1].box = [700, 10, 720, 30];
@@ -174,6 +174,12 @@ test('photographs, errors: a box off its photograph is named on load; missing an
     await byId(page2, 'start').click();
     await waitFor(page2, done, null, FIT_MS);
     console.log(`  ${what} weights: "${e.slice(0, 120)}…", then fitted: ${await status(page2)}`);
+    // The example as it comes (boxes on two views, the third's from the geometry), from
+    // photographs alone to verdict ok, and right.
+    assert.equal(await byId(page2, 'verdict').getAttribute('data-verdict'), 'ok', await byId(page2, 'verdict').textContent());
+    const r = await downloadResult(page2, `photos-result-${what}.json`);
+    assert.deepEqual(r.masks.map((m) => m.first_box_from), ['box', 'box', 'geometry']);
+    assert.ok(r.errors.add_rel < 0.1, `${what}: ADD ${r.errors.add_rel} of the diameter`);
     await page2.context().close();
   }
 });
