@@ -4,9 +4,9 @@
 // Workers (www/pkg-segment/ and www/models/ from scripts/build-segmenter.sh), rounds of
 // segmenting and fitting to a right pose (verdict ok, or ambiguous naming its rival), a
 // click that corrects a view; and the errors: a missing or altered weights file, a box
-// off its photograph. Needs www/pkg/, the
-// examples (scripts/build-examples.sh, with ../shared beside the repository) and the
-// segmenter (scripts/build-segmenter.sh). Timings are printed, never asserted.
+// off its photograph. Needs www/pkg/, the examples (scripts/build-examples.sh, with
+// ../shared beside the repository) and the segmenter (scripts/build-segmenter.sh).
+// Timings are printed, never asserted.
 //
 //   node tests/e2e/photos.test.mjs
 import { existsSync, readFileSync } from 'node:fs';

@@ -2,6 +2,17 @@
 
 use super::MeshSpec;
 
+/// Appends `$x`'s bytes to `$out`, big- or little-endian.
+macro_rules! put {
+    ($out:expr, $big:expr, $x:expr) => {
+        if $big {
+            $out.extend_from_slice(&$x.to_be_bytes())
+        } else {
+            $out.extend_from_slice(&$x.to_le_bytes())
+        }
+    };
+}
+
 /// PLY scalar types.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scalar {
@@ -81,46 +92,28 @@ impl Scalar {
     }
 
     fn bytes(self, v: f64, big: bool, out: &mut Vec<u8>) {
-        macro_rules! put {
-            ($x:expr) => {
-                if big {
-                    out.extend_from_slice(&$x.to_be_bytes())
-                } else {
-                    out.extend_from_slice(&$x.to_le_bytes())
-                }
-            };
-        }
         match self {
-            Scalar::Char => put!(v as i8),
-            Scalar::UChar => put!(v as u8),
-            Scalar::Short => put!(v as i16),
-            Scalar::UShort => put!(v as u16),
-            Scalar::Int => put!(v as i32),
-            Scalar::UInt => put!(v as u32),
-            Scalar::Float => put!(v as f32),
-            Scalar::Double => put!(v),
+            Scalar::Char => put!(out, big, v as i8),
+            Scalar::UChar => put!(out, big, v as u8),
+            Scalar::Short => put!(out, big, v as i16),
+            Scalar::UShort => put!(out, big, v as u16),
+            Scalar::Int => put!(out, big, v as i32),
+            Scalar::UInt => put!(out, big, v as u32),
+            Scalar::Float => put!(out, big, v as f32),
+            Scalar::Double => put!(out, big, v),
         }
     }
 
     fn int_bytes(self, v: i64, big: bool, out: &mut Vec<u8>) {
-        macro_rules! put {
-            ($x:expr) => {
-                if big {
-                    out.extend_from_slice(&$x.to_be_bytes())
-                } else {
-                    out.extend_from_slice(&$x.to_le_bytes())
-                }
-            };
-        }
         match self {
-            Scalar::Char => put!(v as i8),
-            Scalar::UChar => put!(v as u8),
-            Scalar::Short => put!(v as i16),
-            Scalar::UShort => put!(v as u16),
-            Scalar::Int => put!(v as i32),
-            Scalar::UInt => put!(v as u32),
-            Scalar::Float => put!(v as f32),
-            Scalar::Double => put!(v as f64),
+            Scalar::Char => put!(out, big, v as i8),
+            Scalar::UChar => put!(out, big, v as u8),
+            Scalar::Short => put!(out, big, v as i16),
+            Scalar::UShort => put!(out, big, v as u16),
+            Scalar::Int => put!(out, big, v as i32),
+            Scalar::UInt => put!(out, big, v as u32),
+            Scalar::Float => put!(out, big, v as f32),
+            Scalar::Double => put!(out, big, v as f64),
         }
     }
 }
