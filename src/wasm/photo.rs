@@ -82,6 +82,12 @@ impl PhotoSession {
             };
             set("view", job.view.into())?;
             set("side", job.crop.side.into())?;
+            // Where the crop is (its pixels are `rgb`): the pool sends a crop it has
+            // encoded before to the Worker that holds its encoding.
+            set(
+                "crop",
+                format!("{},{},{}", job.crop.x0, job.crop.y0, job.crop.side).into(),
+            )?;
             set("rgb", js_sys::Uint8Array::from(job.crop.rgb(image).as_slice()).into())?;
             set("box", js_sys::Float32Array::from(&b[..]).into())?;
             set("points", js_sys::Float32Array::from(points.as_slice()).into())?;
