@@ -236,37 +236,24 @@ impl PhotoFit {
         if self.state != State::Boxes {
             return Err(Error::Settings("photographs: the rounds have started already".into()));
         }
-        let hinted = self
-            .slots
-            .iter()
-            .filter(|s| matches!(s, Slot::Given(_)) || matches!(s, Slot::Made(m) if m.photo.hint.is_some()))
-            .count();
+        let hinted = self.hinted();
         let unhinted = self.slots.iter().find_map(|s| match s {
             Slot::Made(m) if m.photo.hint.is_none() => Some(m.photo.name.clone()),
             _ => None,
         });
         let sphere = match unhinted {
             None => None,
-            Some(name) if hinted < 2 => {
+            Some(name) if hinted.len() < 2 => {
                 return Err(Error::View {
                     view: name,
                     problem: format!(
                         "has neither a mask nor a box, and its box can only come from the geometry of at least \
-                         two other views with a box or a mask (the scene has {hinted})"
+                         two other views with a box or a mask (the scene has {})",
+                        hinted.len()
                     ),
                 })
             }
-            Some(_) => {
-                let hinted: Vec<(&crate::camera::Camera, PixelBox, &str)> = self
-                    .slots
-                    .iter()
-                    .filter_map(|s| match s {
-                        Slot::Given(v) => PixelBox::of_mask(v.mask()).map(|b| (v.camera(), b, v.name())),
-                        Slot::Made(m) => m.photo.hint.map(|b| (&m.photo.camera, b, m.photo.name.as_str())),
-                    })
-                    .collect();
-                Some(sphere_from_boxes(&hinted)?)
-            }
+            Some(_) => Some(sphere_from_boxes(&hinted)?),
         };
         let margin = self.photo.crop_margin;
         let mut jobs = Vec::new();

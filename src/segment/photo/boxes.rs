@@ -3,6 +3,7 @@
 //! clicked on a view, and the first round's jobs warmed while the boxes are drawn.
 
 use super::{PhotoFit, Slot, State};
+use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::segment::hints::{box_of_sphere, sphere_from_boxes};
 use crate::segment::prompt::{Crop, PromptPoint, SegmentJob};
@@ -30,16 +31,20 @@ pub struct ViewBox {
 }
 
 impl PhotoFit {
-    /// The sphere the hinted views' boxes and masks imply, when two or more have one.
-    fn sphere(&self) -> Option<(glam::DVec3, f64)> {
-        let hinted: Vec<(&crate::camera::Camera, PixelBox, &str)> = self
-            .slots
+    /// The views with a box or a mask: each one's camera, box (a mask's tight box) and name.
+    pub(super) fn hinted(&self) -> Vec<(&Camera, PixelBox, &str)> {
+        self.slots
             .iter()
             .filter_map(|s| match s {
                 Slot::Given(v) => PixelBox::of_mask(v.mask()).map(|b| (v.camera(), b, v.name())),
                 Slot::Made(m) => m.photo.hint.map(|b| (&m.photo.camera, b, m.photo.name.as_str())),
             })
-            .collect();
+            .collect()
+    }
+
+    /// The sphere the hinted views' boxes and masks imply, when two or more have one.
+    fn sphere(&self) -> Option<(glam::DVec3, f64)> {
+        let hinted = self.hinted();
         (hinted.len() >= 2).then(|| sphere_from_boxes(&hinted).ok()).flatten()
     }
 
