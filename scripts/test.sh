@@ -19,6 +19,7 @@ if [ ! -d ../shared/data ]; then
 fi
 
 FAILED=()
+TIMES=() # each step's wall time, listed at the end: what to move to a later tier when the run grows
 LOGS=target/test-logs # each step's output, kept so that a failure's cause is repeated at the end
 rm -rf "$LOGS" && mkdir -p "$LOGS"
 STEP_N=0
@@ -29,11 +30,13 @@ step() { # step NAME COMMAND...
   local log
   log=$(printf '%s/%02d.log' "$LOGS" "$STEP_N")
   echo "== $name"
+  local t0=$SECONDS
   if ! "$@" 2>&1 | tee "$log"; then
     FAILED+=("$name")
     echo "!! FAILED: $name" >&2
     echo "$name" >"$log.failed"
   fi
+  TIMES+=("$(printf '%5d s  %s' $((SECONDS - t0)) "$name")")
 }
 
 # wasm-bindgen-test-runner gives the browser's whole run 20 s and chromedriver 5 s to
@@ -90,6 +93,8 @@ step "the npm package (pkg-config/): build, npm pack, load in Node" \
   bash -c 'bash pkg-config/build.sh && node pkg-config/smoke.mjs'
 
 echo
+echo "each step's wall time (the whole run: $SECONDS s):"
+printf '  %s\n' "${TIMES[@]}"
 if [ ${#FAILED[@]} -eq 0 ]; then
   echo "all steps passed"
   exit 0
