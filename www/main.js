@@ -32,6 +32,11 @@ let paintCount = 0;
 let lastLoad = null; // { files: [{path, file}] } | { example: path }, and `loaded`, `retried`
 let loads = 0; // loads asked for: a slower earlier one (files still being read) is dropped
 let life = null; // the fit Worker's lifeline (lifeline.js): { name, stop }
+// The finished fit's result (JSON text), sent by the worker as the fit ends, so that
+// "Download result" saves it at once, whatever the worker is busy with; null otherwise.
+// `downloadWanted`: Download was clicked once done, before the result came.
+let finishedJson = null;
+let downloadWanted = false;
 
 function startWorker() {
   const url = new URL('./worker.js', import.meta.url);
@@ -55,6 +60,7 @@ function startWorker() {
 
 // Replaces the Worker on purpose (its instance is not to be trusted after a trap).
 function restartWorker() {
+  [finishedJson, downloadWanted] = [null, false];
   life?.stop();
   worker.terminate();
   buildViews([]);
@@ -70,6 +76,7 @@ function workerDied() {
   const message = `The fit's Worker stopped without a word (the browser ended it: out of memory, or a crash). ${
     again ? 'A new one has the scene loaded again: press Start to fit it.' : 'A new one is ready: load the scene again.'}`;
   worker.terminate();
+  [finishedJson, downloadWanted] = [null, false];
   buildViews([]);
   state = 'empty';
   photoState.on = false;
@@ -87,6 +94,7 @@ let kept = null; // an error to show again once the scene is loaded again
 
 const handlers = {
   loaded(msg) {
+    [finishedJson, downloadWanted] = [null, false];
     clearError();
     if (kept) showError(kept);
     kept = null;
@@ -131,6 +139,7 @@ const handlers = {
   view3d: (msg) => to3d(msg),
   cameras: (msg) => showCorrections(msg),
   frame(msg) {
+    if (!msg.progress.done) [finishedJson, downloadWanted] = [null, false];
     photoState.marks = msg.marks;
     // The worker's state is the truth: a frame sent before a Start, Pause or Reset
     // arrived (one in flight when the button was clicked) is put right by the next; a
@@ -144,14 +153,14 @@ const handlers = {
     latest = msg;
     updateButtons();
   },
-  result(msg) {
-    const url = URL.createObjectURL(new Blob([msg.json], { type: 'application/json' }));
-    const a = Object.assign(document.createElement('a'), { href: url, download: 'localisebot-result.json' });
-    document.body.append(a);
-    a.click();
-    a.remove();
-    setTimeout(() => URL.revokeObjectURL(url), 10_000);
+  finished(msg) {
+    finishedJson = msg.json;
+    if (!downloadWanted) return;
+    downloadWanted = false;
+    if (msg.json) saveResult(msg.json);
+    else send('result'); // it could not be made as the fit ended: asked for again, its error shown
   },
+  result: (msg) => saveResult(msg.json),
   // A load that failed, or a fitting slice that threw: the worker has stopped; the
   // message is shown and the controls are usable again.
   error(msg) {
@@ -163,6 +172,16 @@ const handlers = {
 };
 
 const send = (type, extra = {}, transfer = []) => worker.postMessage({ type, ...extra }, transfer);
+
+// Saves the result (JSON text) as localisebot-result.json.
+function saveResult(json) {
+  const url = URL.createObjectURL(new Blob([json], { type: 'application/json' }));
+  const a = Object.assign(document.createElement('a'), { href: url, download: 'localisebot-result.json' });
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 10_000);
+}
 
 // ---- files --------------------------------------------------------------------
 // Loads a scene: { files: [{path, file}] } (read here, then handed to the Worker) or
@@ -264,7 +283,13 @@ ui.reset.addEventListener('click', () => {
   state = 'ready';
   send('reset');
 });
-ui.download.addEventListener('click', () => send('result'));
+// A finished fit's result is here already, or on its way (the worker sends it as the fit
+// ends); before the end, the worker makes it at the current pose.
+ui.download.addEventListener('click', () => {
+  if (finishedJson) saveResult(finishedJson);
+  else if (state === 'done') downloadWanted = true;
+  else send('result');
+});
 // Each view shows its object window by default; the toggle shows the whole image.
 ui.fullFrame.addEventListener('change', () => send('view', { full: ui.fullFrame.checked }));
 $('refine-cameras').addEventListener('change', (e) => send('cameras', { on: e.target.checked }));

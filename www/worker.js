@@ -5,7 +5,8 @@
 // view {full}, cameras {on}, aspect3d {aspect}, setBox {view, box}, point {view, x, y,
 // object}. Messages out: loaded {views, warnings, pool, photo},
 // frame {progress, losses, overlays, size, running, pool},
-// result {json}, error {message, fatal}, view3d {scene | ghosts, suggestions},
+// result {json}, finished {json} (the result, as the fit ends), error {message, fatal},
+// view3d {scene | ghosts, suggestions},
 // cameras {corrections, error} (the 3D view's and the corrections, at the end of this
 // file). Every error — a load, a command, or a slice
 // of the fitting loop — is caught and posted as an error, and the loop stops.
@@ -485,7 +486,14 @@ function done3d(progress) {
   }
   const msg = { type: 'view3d', ghosts: null, alternatives: null, suggestions: null };
   try {
-    const result = photo ? photo.result(session) : session.result();
+    // The result first, for "Download result" (the suggestions below can take seconds on a big mesh).
+    let json = null;
+    try {
+      json = photo ? photo.resultJson(session) : session.resultJson();
+    } finally {
+      post({ type: 'finished', json }); // null: the page asks again, and shows the error
+    }
+    const result = JSON.parse(json);
     msg.ghosts = session.ghosts(GHOSTS, GHOST_SEED);
     // An ambiguous fit's alternatives (FitResult.alternatives), drawn as ghosts of their own colour.
     msg.alternatives = (result.alternatives ?? []).map((a) => a.matrix);

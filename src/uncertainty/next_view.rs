@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::pose::Pose;
 use crate::raster::hard;
 use crate::raster::silhouette::RenderMesh;
-use crate::view::View;
+use crate::view::{PixelBox, View};
 use crate::window::Window;
 use glam::DVec3;
 
@@ -57,10 +57,19 @@ pub fn discriminate(mesh: &crate::mesh::Mesh, pose: &Pose, alternatives: &[Pose]
         if !r.predicted_add_rms.is_finite() {
             continue;
         }
-        let fit = hard::render(mesh, pose, &r.camera);
+        // Both silhouettes on one canvas around the two: at most RESOLUTION across,
+        // not the whole image (the IoU is read in steps of 0.05).
+        let fit_box = projected_box(mesh, pose, &r.camera);
         let d = alternatives
             .iter()
-            .map(|a| 1.0 - crate::metrics::hard_iou(&fit, &hard::render(mesh, a, &r.camera)))
+            .map(|a| {
+                let (Some(f), Some(g)) = (fit_box, projected_box(mesh, a, &r.camera)) else {
+                    return 1.0; // the alternative is behind the camera: nothing alike
+                };
+                let both = [f[0].min(g[0]), f[1].min(g[1]), f[2].max(g[2]), f[3].max(g[3])];
+                let canvas = canvas_around(&r.camera, both, 0.05);
+                1.0 - crate::metrics::hard_iou(&hard::render(mesh, pose, &canvas), &hard::render(mesh, a, &canvas))
+            })
             .fold(f64::INFINITY, f64::min);
         r.discrimination = Some(d);
     }
@@ -186,24 +195,49 @@ pub fn rank_views(
 /// The default number of sphere candidates.
 pub const SPHERE: usize = 64;
 
-/// The canvas camera of `cam`'s object window at `pose`, or `None` when the object is
-/// not whole and in front of the camera.
-fn object_canvas(model: &RenderMesh, pose: &Pose, cam: &Camera) -> Option<Camera> {
-    let in_front = model
-        .mesh
-        .positions
-        .iter()
-        .all(|&p| cam.to_camera(pose.apply(p)).z > 1e-9);
-    if !in_front {
-        return None;
+/// The image box `[x_min, x_max] × [y_min, y_max]` (continuous pixel coordinates, pixel
+/// centres at integers) of the mesh's vertices at `pose` seen by `cam` — the
+/// silhouette's extent, whose extremes are vertices — or `None` when a vertex is not in
+/// front of the camera. One pass over the vertices, where rendering the whole image
+/// would cost a pass over all its pixels (12 MP for a phone's photograph).
+fn projected_box(mesh: &crate::mesh::Mesh, pose: &Pose, cam: &Camera) -> Option<[f64; 4]> {
+    let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    for &p in &mesh.positions {
+        let pc = cam.to_camera(pose.apply(p));
+        if pc.z.is_nan() || pc.z <= 1e-9 {
+            return None;
+        }
+        let q = cam.project(pc);
+        b = [b[0].min(q.x), b[1].min(q.y), b[2].max(q.x), b[3].max(q.y)];
     }
-    let mask = hard::render(&model.mesh, pose, cam);
-    if mask.area() == 0 || mask.touches_border() {
-        return None;
-    }
-    let window = Window::around_mask(&mask, MARGIN)?;
+    b.iter().all(|v| v.is_finite()).then_some(b)
+}
+
+/// The canvas camera (at most [`RESOLUTION`] across) of a square window around the
+/// image box `b` ([`projected_box`]) with `margin`.
+fn canvas_around(cam: &Camera, b: [f64; 4], margin: f64) -> Camera {
+    // A PixelBox covering [x0, x1) spans [x0 − ½, x1 − ½] in continuous coordinates.
+    let pixels = PixelBox {
+        x0: b[0] + 0.5,
+        y0: b[1] + 0.5,
+        x1: b[2] + 0.5,
+        y1: b[3] + 0.5,
+    };
+    let window = Window::around_box(&pixels, margin);
     let (w, h) = window.canvas(RESOLUTION);
-    Some(window.camera(cam, w, h))
+    window.camera(cam, w, h)
+}
+
+/// The canvas camera of `cam`'s object window at `pose`, or `None` when the object is
+/// not whole and in front of the camera: a vertex behind it, or the silhouette's box
+/// less than a pixel across or reaching the image's border pixels (as a rendered mask
+/// touching the border would).
+fn object_canvas(model: &RenderMesh, pose: &Pose, cam: &Camera) -> Option<Camera> {
+    let b = projected_box(&model.mesh, pose, cam)?;
+    let (w, h) = (cam.width as f64, cam.height as f64);
+    let seen = b[2] - b[0] >= 1.0 && b[3] - b[1] >= 1.0;
+    let inside = b[0] > 0.5 && b[1] > 0.5 && b[2] < w - 1.5 && b[3] < h - 1.5;
+    (seen && inside).then(|| canvas_around(cam, b, MARGIN))
 }
 
 #[cfg(test)]
@@ -337,5 +371,42 @@ mod tests {
         // The camera looking away from the object is last and marked unusable.
         assert_eq!(ranked[2].index, 2);
         assert!(ranked[2].predicted_add_rms.is_infinite());
+    }
+    #[test]
+    fn the_object_canvas_is_the_rendered_silhouettes_box_and_none_when_the_border_cuts_it() {
+        let (model, views, pose) = blob_scene(1);
+        let cam = *views[0].camera();
+        let mask = hard::render(&model.mesh, &pose, &cam);
+        let (x0, y0, x1, y1) = mask.bbox().unwrap();
+        let b = projected_box(&model.mesh, &pose, &cam).unwrap();
+        // The vertices' box holds every covered pixel centre, and hardly more.
+        assert!(
+            b[0] <= x0 as f64 && b[1] <= y0 as f64 && b[2] >= x1 as f64 && b[3] >= y1 as f64,
+            "{b:?}"
+        );
+        assert!(b[0] > x0 as f64 - 1.0 && b[1] > y0 as f64 - 1.0 && b[2] < x1 as f64 + 1.0 && b[3] < y1 as f64 + 1.0);
+        // Its canvas is the window a mask-based one would be, to a pixel of the image.
+        let canvas = object_canvas(&model, &pose, &cam).unwrap();
+        let window = Window::around_mask(&mask, MARGIN).unwrap();
+        let (w, h) = window.canvas(RESOLUTION);
+        let expect = window.camera(&cam, w, h);
+        let px = cam.fx / expect.fx; // image pixels per canvas pixel
+        assert!((canvas.cx - expect.cx).abs() * px < 2.0 && (canvas.cy - expect.cy).abs() * px < 2.0);
+        assert!(
+            (canvas.fx / expect.fx - 1.0).abs() < 0.02,
+            "{} {}",
+            canvas.fx,
+            expect.fx
+        );
+        // Moved so that the silhouette reaches past the left edge: not whole, no canvas.
+        let mut cut = cam;
+        cut.cx -= (b[0] + b[2]) / 2.0;
+        assert!(hard::render(&model.mesh, &pose, &cut).touches_border());
+        assert!(object_canvas(&model, &pose, &cut).is_none());
+        // Behind the camera: none either.
+        let mut behind = cam;
+        behind.translation.z = -behind.translation.z - 10.0;
+        assert!(projected_box(&model.mesh, &pose, &behind).is_none());
+        assert!(object_canvas(&model, &pose, &behind).is_none());
     }
 }

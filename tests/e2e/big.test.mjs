@@ -173,7 +173,9 @@ test('big input: eight 12-MP views and a 1M-triangle mesh load and fit within th
       error = await until(page, () => document.querySelector('[data-testid=status]').textContent.startsWith('done'), FIT_MS);
       fitS = (Date.now() - t1) / 1000;
       if (!error) {
+        const t2 = Date.now();
         const [download] = await Promise.all([page.waitForEvent('download'), byId(page, 'download').click()]);
+        console.log(`  fit ${fitS.toFixed(1)} s; the result downloaded ${((Date.now() - t2) / 1000).toFixed(1)} s after the click`);
         const saved = join(artifacts, 'big-result.json');
         await download.saveAs(saved);
         result = JSON.parse(readFileSync(saved, 'utf8'));

@@ -4,6 +4,7 @@
 
 use crate::hard_raster::{cube, duck, random_pose};
 use glam::{DMat3, DVec3};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use localisebot::metrics::{self, PoseErrors};
 use localisebot::{so3, Mask, Pose};
 use rand::rngs::SmallRng;
@@ -114,6 +115,49 @@ fn add_s_agrees_with_brute_force_on_the_duck() {
         assert!(close(e.diameter, scaled.diameter(), 1e-9));
         assert!(close(e.add_s_rel * e.diameter, fast, 1e-12));
     }
+}
+
+#[test]
+fn add_s_of_a_big_mesh_reads_a_strided_subset_and_agrees_with_all_of_it() {
+    // 62 002 vertices: more than MAX_QUERY_POINTS, so every second one is a query.
+    let mesh = localisebot::app::synth::blob_mesh(250, 250);
+    let pts = mesh.used_points();
+    assert!(pts.len() > metrics::MAX_QUERY_POINTS);
+    let queried = metrics::strided(&pts, metrics::MAX_QUERY_POINTS).count();
+    assert!(
+        (metrics::MAX_QUERY_POINTS / 2..=metrics::MAX_QUERY_POINTS).contains(&queried),
+        "{queried}"
+    );
+    assert_eq!(
+        metrics::strided(&pts[..100], metrics::MAX_QUERY_POINTS).count(),
+        100,
+        "a small mesh: all of it"
+    );
+    let mut rng = SmallRng::seed_from_u64(5);
+    let gt = random_pose(&mut rng, &mesh);
+    assert_eq!(metrics::add_s(&mesh, &gt, &gt), 0.0);
+    let est = Pose {
+        rotation: gt.rotation * so3::exp(DVec3::new(0.05, -0.03, 0.02)),
+        translation: gt.translation + DVec3::new(0.02, 0.0, -0.01),
+        scale: gt.scale,
+    };
+    // ADD-S over every vertex (a k-d tree of its own).
+    let posed: Vec<[f64; 3]> = pts.iter().map(|&p| est.apply(p).to_array()).collect();
+    let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(&posed);
+    let all = pts
+        .iter()
+        .map(|&p| {
+            tree.nearest_one::<SquaredEuclidean>(&gt.apply(p).to_array())
+                .distance
+                .sqrt()
+        })
+        .sum::<f64>()
+        / pts.len() as f64;
+    let fast = metrics::add_s(&mesh, &est, &gt);
+    assert!(
+        all > 0.0 && (fast / all - 1.0).abs() < 0.02,
+        "subset {fast} vs all {all}"
+    );
 }
 
 fn rect(w: u32, h: u32, x0: u32, y0: u32, x1: u32, y1: u32) -> Mask {
