@@ -10,23 +10,26 @@
 #
 #   bash scripts/bench-big.sh            # BIG_KEEP=1 reuses an existing target/big-scene
 #                                        # LOCALISEBOT=PATH uses that binary instead of building
+#                                        # CLI_PROFILE=dev builds the dev profile, not release
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
 T=${CARGO_TARGET_DIR:-target}
+PROFILE=${CLI_PROFILE:-release} # CLI_PROFILE=dev: the dev build (as scripts/test.sh has it)
+D=$T/$([ "$PROFILE" = dev ] && echo debug || echo "$PROFILE")
 SCENE=target/big-scene
 OUT=target/big-scene-cli
 if [ -z "${LOCALISEBOT:-}" ]; then
-  cargo build --locked --release --bin localisebot --example big_scene
-  B=$T/release/localisebot
+  cargo build --locked --profile "$PROFILE" --bin localisebot --example big_scene
+  B=$D/localisebot
 else
-  cargo build --locked --release --example big_scene
+  cargo build --locked --profile "$PROFILE" --example big_scene
   B=$LOCALISEBOT
 fi
 mkdir -p "$OUT"
 if [ "${BIG_KEEP:-}" != 1 ] || [ ! -f "$SCENE/scene.json" ]; then
   rm -rf "$SCENE"
-  "$T/release/examples/big_scene" "$OUT/mesh"
+  "$D/examples/big_scene" "$OUT/mesh"
   /usr/bin/time -f '%e s wall, %M KB peak RSS' -o "$OUT/synth.time" \
     "$B" synth --mesh "$OUT/mesh/big.glb" --views 8 --width 4032 --height 3024 --seed 1 --images --out "$SCENE"
   echo "synth: $(cat "$OUT/synth.time")"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Builds the web page's examples into www/examples/ (ignored by git) with the release
-# command line, and www/examples/index.json listing them ({"examples": [{id, title,
+# Builds the web page's examples into www/examples/ (ignored by git) with the command
+# line (the release build; CLI_PROFILE=dev builds and uses the dev one instead), and www/examples/index.json listing them ({"examples": [{id, title,
 # path}]}, path relative to index.json), which "Load example" offers:
 #
 #   toy   the project's procedural toy aeroplane (src/app/shapes.rs), 4 views: always;
@@ -23,8 +23,11 @@ cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
 OUT=${1:-www/examples}
 SHARED=../shared/data
-cargo build --locked --release --bin localisebot
-B=${CARGO_TARGET_DIR:-target}/release/localisebot
+PROFILE=${CLI_PROFILE:-release}
+# The dev build with the examples, as `cargo test` builds it: their dev-dependencies
+# change a few crates' features, and alone the binary would be compiled again.
+cargo build --locked --profile "$PROFILE" --bin localisebot $([ "$PROFILE" = dev ] && echo --examples)
+B=${CARGO_TARGET_DIR:-target}/$([ "$PROFILE" = dev ] && echo debug || echo "$PROFILE")/localisebot
 rm -rf "$OUT"
 mkdir -p "$OUT"
 ENTRIES=()

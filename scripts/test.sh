@@ -64,6 +64,12 @@ wasm_tests() { # wasm_tests (browser|node) TEST_TARGET... — built as the shipp
   fi
 }
 
+# The command line and the examples the later steps run are the dev build the native
+# tests made (the dev profile is optimised, opt-level 2, and fits as fast as release):
+# building the release profile as well would compile every dependency (tract, the
+# segmenter's engine, among them) a second time, ten minutes on two cores.
+export CLI_PROFILE=dev
+
 step "cargo fmt --check" cargo fmt --all -- --check
 step "cargo clippy" cargo clippy --workspace --all-targets --locked -- -D warnings
 step "cargo doc (the crate's manual: no broken links, every public item documented)" \
@@ -82,7 +88,7 @@ step "the page's examples (www/examples)" bash scripts/build-examples.sh
 step "the page's browser libraries (www/vendor: three.js)" bash scripts/build-vendor.sh
 step "the segmenter's wasm module and weights for the page (www/pkg-segment, www/models)" bash scripts/build-segmenter.sh
 step "the examples a user learns from (examples/: a scene built in code, a scene file fitted)" \
-  bash -c 'cargo run --locked --release --example build_scene && for s in www/examples/*/scene.json; do cargo run --locked --release --example fit_scene -- "$s" || exit 1; done'
+  bash -c 'cargo run --locked --profile "$CLI_PROFILE" --example build_scene && for s in www/examples/*/scene.json; do cargo run --locked --profile "$CLI_PROFILE" --example fit_scene -- "$s" || exit 1; done'
 step "the web page, end to end (Playwright + Chromium)" node tests/e2e/page.test.mjs
 step "the page's 3D view, end to end (Playwright + Chromium, WebGL on SwiftShader)" node tests/e2e/view3d.test.mjs
 step "the page from photographs and boxes, end to end (Playwright + Chromium: segmenter in Workers)" node tests/e2e/photos.test.mjs
