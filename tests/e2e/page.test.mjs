@@ -1,6 +1,6 @@
 // End-to-end test of the web page (www/): playwright-core drives Debian's Chromium
 // against scripts/serve.mjs on a free port. Needs www/pkg/ (scripts/build-wasm.sh) and
-// www/examples/ with the release command line (scripts/build-examples.sh), which also
+// www/examples/ with the command line (scripts/build-examples.sh; CLI_PROFILE as there), which also
 // makes the test's other scenes (the toy as .gltf + .bin and as .ply) in target/e2e/.
 //
 //   node tests/e2e/page.test.mjs        # prints one line per test, then "N passed, N failed"
@@ -24,7 +24,9 @@ if (!existsSync(join(root, 'www', 'pkg', 'localisebot_bg.wasm'))) {
   process.exit(1);
 }
 const examplesDir = join(root, 'www', 'examples');
-const cli = join(process.env.CARGO_TARGET_DIR ?? join(root, 'target'), 'release', 'localisebot');
+// The command line build-examples.sh used: release, or the dev build with CLI_PROFILE=dev (test.sh).
+const profile = process.env.CLI_PROFILE ?? 'release';
+const cli = join(process.env.CARGO_TARGET_DIR ?? join(root, 'target'), profile === 'dev' ? 'debug' : profile, 'localisebot');
 if (!existsSync(join(examplesDir, 'index.json')) || !existsSync(cli)) {
   console.error(`www/examples/ or ${cli} is missing: run scripts/build-examples.sh first`);
   process.exit(1);
