@@ -372,6 +372,7 @@ mod tests {
         assert_eq!(ranked[2].index, 2);
         assert!(ranked[2].predicted_add_rms.is_infinite());
     }
+
     #[test]
     fn the_object_canvas_is_the_rendered_silhouettes_box_and_none_when_the_border_cuts_it() {
         let (model, views, pose) = blob_scene(1);
