@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the web page's examples into www/examples/ (ignored by git) with the command
-# line (the release build; CLI_PROFILE=dev builds and uses the dev one instead), and www/examples/index.json listing them ({"examples": [{id, title,
-# path}]}, path relative to index.json), which "Load example" offers:
+# line (the release build; CLI_PROFILE=dev builds and uses the dev one instead), and
+# www/examples/index.json listing them ({"examples": [{id, title, path}]}, path
+# relative to index.json), which "Load example" offers:
 #
 #   toy   the project's procedural toy aeroplane (src/app/shapes.rs), 4 views: always;
 #   duck  the Khronos Duck, read where it is in ../shared/data (the shared third-party
