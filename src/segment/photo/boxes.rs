@@ -107,7 +107,8 @@ impl PhotoFit {
                     problem: "once fitted, a view's box can be redrawn but not removed".into(),
                 });
             };
-            m.crop = Crop::around(&b, margin);
+            // The last round's crop while it frames the box: its encoding is kept.
+            m.crop = Crop::kept_or_around(m.crop, &b, margin);
             m.reference = None;
             let mut job = SegmentJob::from_box(view, m.crop, &b);
             add_points(&mut job, &m.points);

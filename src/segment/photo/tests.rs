@@ -178,6 +178,25 @@ fn a_point_after_the_rounds_segments_that_view_again() {
         "the other views were not asked"
     );
     assert!(metrics::pose_errors(fit_mesh(&fit), &est2.pose(), &est.pose()).add_rel < 0.01);
+    // A box redrawn a little on view 1 once done: asked again on the crop it was last
+    // segmented on (its encoding kept), prompted with the new box.
+    let Slot::Made(m) = &fit.slots[1] else { unreachable!() };
+    let last = m.crop;
+    let c = PixelBox::of_mask(fit.masks()[1].1.unwrap()).unwrap();
+    fit.set_box(1, Some([c.x0 + 1.0, c.y0 + 1.0, c.x1 - 1.0, c.y1 - 1.0]))
+        .unwrap();
+    let jobs = fit.pending().to_vec();
+    assert_eq!((jobs.len(), jobs[0].view, jobs[0].crop), (1, 1, last));
+    // Drawn far from it: a crop around the new box.
+    run(&mut fit, &mut seg, |_, _| {}).unwrap();
+    let w = c.x1 - c.x0;
+    let x0 = if c.x0 > 80.0 { 1.0 } else { 159.0 - w };
+    let far = PixelBox::new("view1", [x0, c.y0, x0 + w, c.y1], 160, 160).unwrap();
+    fit.set_box(1, Some(far.to_array())).unwrap();
+    assert_eq!(
+        fit.pending()[0].crop,
+        Crop::around(&far, PhotoSettings::default().crop_margin)
+    );
 }
 
 /// Answers with the true silhouette, but in the first round view 2's is moved 30
