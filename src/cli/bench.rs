@@ -98,8 +98,12 @@ pub fn run(a: &BenchArgs) -> CliResult {
     let mut rows = one.install(|| evaluations(a, raster))?;
     if a.scene.is_none() && !a.no_fit {
         rows.extend(all.install(|| fits(a, raster))?);
+        let t0 = Instant::now();
         match super::segmenter::load(&super::segmenter::models_dir(a.models.as_deref())) {
-            Ok(sam) => rows.extend(all.install(|| photos(a, sam))?),
+            Ok(sam) => {
+                let load_s = t0.elapsed().as_secs_f64();
+                rows.extend(all.install(|| photos(a, sam, load_s))?)
+            }
             Err(e) => eprintln!("note: the photograph rows are left out: {e}"),
         }
     }
@@ -241,8 +245,9 @@ fn fits(a: &BenchArgs, raster: RasterKind) -> CliResult<Vec<Row>> {
 /// The segmenter's encoder on the LM-O duck's crops (one crop alone, three as one
 /// mosaic; medians of 3 runs, on the pool's threads), and the box-to-pose fit of the
 /// three views (images and boxes in, as `import bop --boxes` makes them; the model
-/// loaded before the clock starts).
-fn photos(a: &BenchArgs, mut sam: SamSegmenter) -> CliResult<Vec<Row>> {
+/// loaded before the clock starts); `load_s`, the model's loading (files read, their
+/// SHA-256 checked, both networks optimised), is a row of its own.
+fn photos(a: &BenchArgs, mut sam: SamSegmenter, load_s: f64) -> CliResult<Vec<Row>> {
     let lmo = shared(a, "real/lmo")?;
     let mut opts = BopOptions::new(2, 9);
     opts.image_ids = Some(vec![102, 362, 476]);
@@ -291,6 +296,12 @@ fn photos(a: &BenchArgs, mut sam: SamSegmenter) -> CliResult<Vec<Row>> {
     let tiles: Vec<(&[u8], u32)> = crops.iter().map(|(c, s)| (c.as_slice(), *s)).collect();
     let mosaic = median3(&|| model.embed_tiles(&tiles).map(|_| ()).map_err(|e| e.to_string()))?;
     let mut rows = vec![
+        Row {
+            name: "segmenter: load, check, optimise".into(),
+            size: "28+16.5 MB".into(),
+            fit_s: Some(load_s),
+            ..Row::default()
+        },
         Row {
             name: "encoder: 1 crop, 1024²".into(),
             views: 1,
