@@ -555,18 +555,43 @@ function loadedPhotos() {
 }
 
 // The first round's crops of the views with a box, encoded while the other boxes are
-// drawn (each crop once): Start then finds them encoded. Failures wait for Start.
+// drawn (each crop once): Start then finds them encoded. The crops are those of the
+// boxes as they stand when the segmenter is ready (a box redrawn while it loads is not
+// encoded twice). Failures wait for Start.
 const warmed = new Set();
+let warming = 0; // batches of warmed crops under way
 function warm() {
   if (!photo || photo.started) return;
-  const key = (j) => `${j.view}:${j.side}:${j.box}`;
-  const jobs = [...photo.warmJobs()].filter((j) => !warmed.has(key(j)));
-  if (jobs.length === 0) return;
-  const keys = jobs.map(key); // made now: the jobs' buffers go to the segmenter
-  for (const k of keys) warmed.add(k);
-  startSegmenters(photo.views().filter((v) => !v.has_mask).length)
-    .then((pool) => pool.segment(jobs, undefined, true))
-    .catch(() => keys.forEach((k) => warmed.delete(k)));
+  const p = photo;
+  startSegmenters(p.views().filter((v) => !v.has_mask).length)
+    .then((pool) => {
+      if (photo !== p || p.started) return null; // another scene, or Start asked for its own
+      const key = (j) => `${j.view}:${j.side}:${j.box}`;
+      const all = [...p.warmJobs()];
+      const jobs = all.filter((j) => !warmed.has(key(j)));
+      const n = all.length;
+      const ready = () => {
+        // Said once no crop is being warmed, and while Start has not taken the line over.
+        if (photo !== p || p.started || warming > 0) return;
+        post({
+          type: 'segmenting', done: 1, total: 1, finished: true, encodings: pool.encodings,
+          text: `segmenter ready${n > 0 ? `, ${n} view${n > 1 ? 's' : ''} encoded` : ''}: Start segments and fits`,
+        });
+      };
+      if (jobs.length === 0) return ready();
+      const keys = jobs.map(key); // made now: the jobs' buffers go to the segmenter
+      for (const k of keys) warmed.add(k);
+      post({ type: 'segmenting', text: `encoding the crops of ${jobs.length} box${jobs.length > 1 ? 'es' : ''}…`, done: 0, total: 0 });
+      warming++;
+      return pool.segment(jobs, undefined, true).then(() => {
+        warming--;
+        ready();
+      }, () => {
+        warming--;
+        keys.forEach((k) => warmed.delete(k));
+      });
+    })
+    .catch(() => {});
 }
 
 function postBoxes() {

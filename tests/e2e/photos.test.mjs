@@ -134,6 +134,32 @@ test('photographs: boxes on two views, the third proposed then dragged; Start se
   await page.context().close();
 });
 
+test('photographs, Start once the segmenter is ready: the boxed views encoded while the boxes were looked at, the page says so; Start segments and fits to a right pose (timed)', async () => {
+  const page = await openPage();
+  const shown = await loadExample(page);
+  assert.deepEqual(shown.map((s) => s.kind), ['given', 'given', 'proposed']);
+  // What a user drawing the boxes sees once the segmenter has loaded and encoded them.
+  await waitFor(page, () => document.querySelector('[data-testid=seg-text]').textContent.startsWith('segmenter ready'), null, FIT_MS);
+  const said = await byId(page, 'seg-text').textContent();
+  assert.match(said, /^segmenter ready, 3 views encoded: Start/, said);
+  const warm = JSON.parse((await byId(page, 'seg-text').getAttribute('data-encodings')) ?? '[]');
+  assert.deepEqual(warm.map((e) => e.count), [3], 'one run of the encoder for the three crops');
+  const fromLoad = (Date.now() - page.loadedAt) / 1000;
+  const t0 = Date.now();
+  await byId(page, 'start').click();
+  await waitFor(page, done, null, FIT_MS);
+  const wall = (Date.now() - t0) / 1000;
+  const result = await downloadResult(page, 'photos-result-warm.json');
+  const encodings = JSON.parse((await byId(page, 'seg-text').getAttribute('data-encodings')) ?? '[]');
+  assert.deepEqual(encodings.map((e) => e.count), [3], 'Start found the crops encoded');
+  console.log(`  ready ${fromLoad.toFixed(1)} s after Load ("${said}"); box to pose ${wall.toFixed(1)} s from Start, `
+    + `verdict ${result.verdict}, ADD ${(100 * result.errors.add_rel).toFixed(2)} % d; phases (s): `
+    + `${await page.evaluate(() => document.body.dataset.timings)}`);
+  assert.ok(result.errors.add_rel < 0.1, `ADD ${result.errors.add_rel} of the diameter`);
+  assert.deepEqual(page.problems, []);
+  await page.context().close();
+});
+
 // The example's scene with its files, as dropped files (bare names).
 function exampleFiles(edit = (s) => s) {
   const text = JSON.stringify(edit(structuredClone(scene)));
