@@ -70,11 +70,12 @@ pub fn load_with(file: &str, bytes: &[u8], extra: Resolver, limits: &Limits) -> 
         for prim in gmesh.primitives().filter(|p| is_triangles(p.mode())) {
             let n = prim.get(&gltf::Semantic::Positions).map_or(0, |a| a.count() as u64);
             let corners = prim.indices().map_or(n, |a| a.count() as u64);
-            vertices += n;
-            triangles += match prim.mode() {
+            // Saturating: declared counts are the file's word, up to u64::MAX each.
+            vertices = vertices.saturating_add(n);
+            triangles = triangles.saturating_add(match prim.mode() {
                 Mode::Triangles => corners / 3,
                 _ => corners.saturating_sub(2),
-            };
+            });
         }
     }
     limits.check_mesh(file, vertices, triangles)?;
@@ -655,6 +656,32 @@ mod tests {
             &no_files,
         );
         assert_eq!(ok.unwrap().triangles.len(), 2);
+    }
+
+    /// Found by `damaged_meshes_are_refused_cleanly` (tests/integration/properties.rs):
+    /// an accessor declaring 2⁶³ + 3 positions, instanced three times, overflowed the
+    /// count summed over the instances (a panic in debug builds); its input is
+    /// `fuzz/regressions/gltf/instanced-count-overflow`.
+    #[test]
+    fn declared_counts_that_overflow_when_summed_are_refused_by_the_limits() {
+        let nodes = r#"{"mesh":0},{"mesh":0},{"mesh":0}"#;
+        let text = gltf_text(4, None, nodes, "")
+            .replace(r#""nodes":[0]"#, r#""nodes":[0,1,2]"#)
+            .replace(
+                r#""count":4,"type":"VEC3""#,
+                r#""count":9223372036854775811,"type":"VEC3""#,
+            );
+        assert!(text.contains("9223372036854775811") && text.contains("[0,1,2]"));
+        let e = load("huge.gltf", text.as_bytes(), &no_files).unwrap_err().to_string();
+        assert!(e.contains("huge.gltf") && e.contains("vertex count"), "{e}");
+        // The file as the property made it (kept in the fuzz targets' raw mode: after a 0 byte).
+        let kept = std::fs::read(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fuzz/regressions/gltf/instanced-count-overflow"
+        ))
+        .unwrap();
+        let e = load("huge.glb", &kept[1..], &no_files).unwrap_err().to_string();
+        assert!(e.contains("huge.glb") && e.contains("vertex count"), "{e}");
     }
 
     #[test]
