@@ -69,6 +69,13 @@ wasm_tests() { # wasm_tests (browser|node) TEST_TARGET... — built as the shipp
 # building the release profile as well would compile every dependency (tract, the
 # segmenter's engine, among them) a second time, ten minutes on two cores.
 export CLI_PROFILE=dev
+# A clean run builds once: incremental compilation's caches would only cost disk.
+export CARGO_INCREMENTAL=${CARGO_INCREMENTAL:-0}
+
+# The disk the build writes to, before and after: a machine that runs out fails every
+# later step with "No space left on device" (a CI run did, once).
+disk() { df -h --output=avail,size,target . 2>/dev/null | tail -n 1; }
+echo "disk free at the start: $(disk)"
 
 step "cargo fmt --check" cargo fmt --all -- --check
 step "cargo clippy" cargo clippy --workspace --all-targets --locked -- -D warnings
@@ -99,6 +106,7 @@ step "the npm package (pkg-config/): build, npm pack, load in Node" \
   bash -c 'bash pkg-config/build.sh && node pkg-config/smoke.mjs'
 
 echo
+echo "disk free at the end: $(disk) (the build: $(du -sh target 2>/dev/null | cut -f1))"
 echo "each step's wall time (the whole run: $SECONDS s):"
 printf '  %s\n' "${TIMES[@]}"
 if [ ${#FAILED[@]} -eq 0 ]; then
