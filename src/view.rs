@@ -56,6 +56,9 @@ pub struct View {
     image: Option<Rgba>,
     /// Object pixels of the mask that are not ignored.
     known_area: usize,
+    /// The contour loss's distances capped at this multiple of the mask's equivalent
+    /// radius (`None`: uncapped).
+    contour_cap: Option<f64>,
 }
 
 impl View {
@@ -120,6 +123,7 @@ impl View {
             ignore,
             image,
             known_area,
+            contour_cap: None,
         })
     }
 
@@ -182,6 +186,22 @@ impl View {
             )));
         }
         Ok(View { camera, ..self.clone() })
+    }
+
+    /// The same view with the contour loss's distances capped at `k` times the mask's
+    /// equivalent radius `√(|M|/π)` (`loss::contour`): for a mask that may miss a thin
+    /// part of the object or fill a hole in it (a segmenter's), a render reaching far
+    /// outside it costs in proportion to its area beyond `k·r`, not to its distance.
+    /// `k` must be positive (a non-positive or non-finite `k` leaves it uncapped).
+    pub fn with_contour_cap(mut self, k: f64) -> View {
+        self.contour_cap = (k.is_finite() && k > 0.0).then_some(k);
+        self
+    }
+
+    /// The contour loss's cap, a multiple of the mask's equivalent radius, when set
+    /// ([`View::with_contour_cap`]).
+    pub fn contour_cap(&self) -> Option<f64> {
+        self.contour_cap
     }
 
     /// The same view without its image (to save memory where it is not shown).

@@ -18,7 +18,10 @@
 //! for a disc of radius r shifted by δ pixels, L ≈ ½(δ/r)². Unlike the IoU it keeps
 //! growing (and keeps a gradient) when the render and the mask are disjoint — but,
 //! like any mask-based term, not for a render entirely off the canvas.
-//! Distances are exact (`crate::loss::edt`) and capped at the image's width + height.
+//! Distances are exact (`crate::loss::edt`) and capped at the image's width + height —
+//! or, for a view that asks ([`crate::View::with_contour_cap`]: a segmenter's mask, which
+//! may miss a thin part of the object or fill a hole in it), at `k·r`: a render reaching
+//! beyond costs in proportion to its area there, as in the IoU, not to its distance.
 //!
 //! Unknown pixels (outside the image, or in the view's ignore mask) count in no sum:
 //! they are left out of L and of |M|, `d_out` measures the distance to the nearest
@@ -48,12 +51,20 @@ impl ContourTarget {
     /// Precomputes the distance transforms of `mask`; `view` names it in errors.
     /// Errors: an empty mask (the loss would have no scale).
     pub fn new(mask: &Mask, view: &str) -> Result<ContourTarget> {
-        ContourTarget::from_parts(mask.width, mask.height, &mask.data, None, view)
+        ContourTarget::from_parts(mask.width, mask.height, &mask.data, None, None, view)
     }
 
     /// As [`ContourTarget::new`] for a `width`×`height` mask given as 0/1 bytes, with
-    /// `known` (1 = known) marking the pixels that count (all when `None`).
-    pub fn from_parts(width: u32, height: u32, mask: &[u8], known: Option<&[u8]>, view: &str) -> Result<ContourTarget> {
+    /// `known` (1 = known) marking the pixels that count (all when `None`) and the
+    /// distances capped at `cap·r` when `cap` is given (module doc).
+    pub fn from_parts(
+        width: u32,
+        height: u32,
+        mask: &[u8],
+        known: Option<&[u8]>,
+        cap: Option<f64>,
+        view: &str,
+    ) -> Result<ContourTarget> {
         let (w, h) = (width as usize, height as usize);
         let is_known = |i: usize| known.is_none_or(|k| k[i] != 0);
         let area = (0..w * h).filter(|&i| mask[i] != 0 && is_known(i)).count();
@@ -66,10 +77,11 @@ impl ContourTarget {
         // Where the object may be (mask or unknown), and known background.
         let maybe_object: Vec<bool> = (0..w * h).map(|i| mask[i] != 0 || !is_known(i)).collect();
         let background: Vec<bool> = (0..w * h).map(|i| mask[i] == 0 && is_known(i)).collect();
-        let cap = (w + h) as f64;
         let dt_out = edt::distance(w, h, &maybe_object);
         let dt_in = edt::distance(w, h, &background);
-        let norm = area as f64 * (area as f64 / std::f64::consts::PI).sqrt();
+        let r = (area as f64 / std::f64::consts::PI).sqrt();
+        let norm = area as f64 * r;
+        let cap = cap.map_or((w + h) as f64, |k| (k * r).min((w + h) as f64));
         let shift = |d: f64| (d.min(cap) - 0.5).max(0.0);
         let mut offset = 0.0;
         let weight = (0..w * h)
@@ -178,6 +190,46 @@ mod tests {
         // ½(δ/r)² for a small shift, within the discretisation.
         let l = target.loss(&as_alpha(&disc(96, 96, 44.0, 44.0, 20.0)));
         assert!((l / (0.5 * 0.04) - 1.0).abs() < 0.25, "{l}");
+    }
+
+    #[test]
+    fn a_capped_target_charges_a_far_render_by_its_area_and_a_near_one_as_before() {
+        let m = disc(128, 96, 50.0, 48.0, 20.0);
+        let r = (m.area() as f64 / std::f64::consts::PI).sqrt();
+        let plain = ContourTarget::new(&m, "v").unwrap();
+        let capped = ContourTarget::from_parts(128, 96, &m.data, None, Some(0.15), "v").unwrap();
+        // Every distance at most 0.15·r (the weight is (d_out − d_in)/N).
+        let cap = 0.15 * r;
+        assert!(capped.gradient().iter().all(|w| (w * capped.norm).abs() <= cap + 1e-9));
+        assert!(plain.gradient().iter().any(|w| (w * plain.norm).abs() > 2.0 * cap));
+        // Within the cap, the same loss: a render a pixel off.
+        let near = as_alpha(&disc(128, 96, 51.0, 48.0, 20.0));
+        assert!((capped.loss(&near) - plain.loss(&near)).abs() < 1e-12);
+        // A thin part the mask misses (a spout 30 px long, 2 px wide): uncapped it costs
+        // its reach, capped at most cap·area/N.
+        let mut spout = near.clone();
+        for x in 71..101 {
+            for y in 47..49 {
+                spout[y * 128 + x] = 1.0;
+            }
+        }
+        let (dp, dc) = (
+            plain.loss(&spout) - plain.loss(&near),
+            capped.loss(&spout) - capped.loss(&near),
+        );
+        assert!(dc > 0.0 && dc <= 60.0 * cap / capped.norm + 1e-12, "{dc}");
+        assert!(dp > 3.0 * dc, "uncapped {dp}, capped {dc}");
+        // Still a gradient everywhere near the mask, exact against central differences.
+        let a: Vec<f64> = (0..128 * 96).map(|i| (i as f64 * 0.37).sin() * 0.5 + 0.5).collect();
+        let mut g = vec![0.0; a.len()];
+        capped.loss_grad(&a, 1.0, &mut g);
+        for p in (0..a.len()).step_by(97) {
+            let (mut ap, mut am) = (a.clone(), a.clone());
+            ap[p] += 1e-4;
+            am[p] -= 1e-4;
+            let fd = (capped.loss(&ap) - capped.loss(&am)) / 2e-4;
+            assert!((g[p] - fd).abs() < 1e-9, "pixel {p}: {} against {fd}", g[p]);
+        }
     }
 
     #[test]

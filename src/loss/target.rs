@@ -106,6 +106,8 @@ pub struct ViewTarget {
     pub known_bits: Option<BitMask>,
     /// The contour loss's distance fields, when asked for and the mask is not empty.
     pub contour: Option<ContourTarget>,
+    /// The view's cap on the contour loss's distances ([`crate::View::contour_cap`]).
+    pub contour_cap: Option<f64>,
 }
 
 impl ViewTarget {
@@ -126,7 +128,14 @@ impl ViewTarget {
         let (area, centroid) = bits.area_and_centroid();
         let known = (!all_known).then_some(known);
         let contour = if contour && area > 0.0 {
-            Some(ContourTarget::from_parts(w, h, &mask, known.as_deref(), view.name())?)
+            Some(ContourTarget::from_parts(
+                w,
+                h,
+                &mask,
+                known.as_deref(),
+                view.contour_cap(),
+                view.name(),
+            )?)
         } else {
             None
         };
@@ -138,6 +147,7 @@ impl ViewTarget {
             known,
             area,
             centroid,
+            contour_cap: view.contour_cap(),
             bits,
             known_bits,
             contour,

