@@ -64,7 +64,7 @@ pub struct PhotoSettings {
     /// them should cost their area, not their reach. Measured on the LM-O photographs
     /// (tier2 `photos`): 27 → 29 of 32 fits within ADD(-S) < 0.1 d (the watering can
     /// no longer turned 177° with the first set of boxes), the masks' median IoU 0.807 →
-    /// 0.815; with 0.3, 28 of 32. `None`: uncapped, as for given masks.
+    /// 0.815; with 0.1 or 0.3, 28 of 32. `None`: uncapped, as for given masks.
     pub contour_cap: Option<f64>,
 }
 
