@@ -311,3 +311,73 @@ fn made_masks_are_fitted_with_capped_contour_distances_and_a_bad_cap_is_refused(
         assert!(e.contains("out of range"), "{bad}: {e}");
     }
 }
+
+/// Answers with the true silhouette, except view 2's: moved 30 pixels right, then 24,
+/// then 30 … (a segmenter that keeps taking the wrong object; the masks never settle,
+/// and no fit is `ok`).
+struct Wandering {
+    truth: Vec<Mask>,
+    calls: usize,
+}
+
+impl Segmenter for Wandering {
+    fn segment(&mut self, jobs: &[SegmentJob], _: &[&Rgba]) -> Result<Vec<SegmentOutput>> {
+        self.calls += 1;
+        let by = if self.calls % 2 == 1 { 30 } else { 24 };
+        Ok(jobs
+            .iter()
+            .map(|j| {
+                let t = &self.truth[j.view];
+                let mut m = t.clone();
+                if j.view == 2 {
+                    for y in 0..t.height {
+                        for x in 0..t.width {
+                            let from = x.checked_sub(by).map_or(0, |sx| t.data[(y * t.width + sx) as usize]);
+                            m.data[(y * t.width + x) as usize] = from;
+                        }
+                    }
+                }
+                SegmentOutput::single(in_crop(&m, j.crop), vec![0.0; 16], 0.9)
+            })
+            .collect())
+    }
+}
+
+#[test]
+fn fits_in_doubt_search_afresh_only_as_often_as_asked() {
+    for (searches, expected) in [(2, [true, true, false]), (3, [true, true, true])] {
+        let (scene, truth) = scene();
+        let settings = PhotoSettings {
+            searches,
+            ..PhotoSettings::default()
+        };
+        let mut fit = PhotoFit::new(scene, FitSettings::default(), settings).unwrap();
+        let mut seg = Wandering { truth, calls: 0 };
+        // Each finished fit: whether it searched the orientations, and its verdict.
+        let mut fits: Vec<(bool, Option<Verdict>)> = Vec::new();
+        run(&mut fit, &mut seg, |_, est| {
+            if est.is_done() {
+                fits.push((est.progress().search_total > 0, est.judgement().map(|j| j.verdict)));
+            }
+        })
+        .unwrap();
+        assert_eq!(fits.len(), 3, "searches {searches}: {fits:?}");
+        assert!(
+            fits.iter().all(|(_, v)| *v != Some(Verdict::Ok)),
+            "every fit in doubt: {fits:?}"
+        );
+        assert_eq!(
+            fits.iter().map(|f| f.0).collect::<Vec<_>>(),
+            expected,
+            "searches {searches}"
+        );
+        // A point added after the rounds: the refit of a fit in doubt searches again.
+        let c = PixelBox::of_mask(fit.masks()[2].1.unwrap()).unwrap();
+        fit.toggle_point(2, c.x1 + 3.0, c.y1 + 3.0, false).unwrap();
+        let est = run(&mut fit, &mut seg, |_, _| {}).unwrap();
+        assert!(
+            est.progress().search_total > 0,
+            "searches {searches}: the refit searched"
+        );
+    }
+}
