@@ -75,8 +75,8 @@ pub struct PhotoSettings {
     /// point added, [`PhotoFit::toggle_point`]) searches when the last fit was not
     /// `ok`. Measured on the LM-O photographs (tier2 `photos`, 40 fits): 2 against 3
     /// (every fit in doubt searching) — the same 29 of 32 within ADD(-S) < 0.1 d,
-    /// median ADD(-S) 4.37 against 4.42 % d, the median box-to-pose time 5.7 against
-    /// 6.6 s; 1 (only the first): 25 of 32.
+    /// median ADD(-S) 4.37 against 4.42 % d, the median box-to-pose time 5.7–5.9 (two
+    /// runs) against 6.6 s; 1 or 0 (the first fit only): 25 of 32.
     pub searches: usize,
 }
 
