@@ -474,11 +474,11 @@ fn lmo_from_photographs_and_boxes() {
         pooled.edges_won.0,
         pooled.edges_won.1
     );
-    // How far the outlines are from the photographs' strongest edges: the best move of
-    // each outline within ±8 px (measured: the annotated outlines 4.2 px, a different
-    // direction per view, 0 of 24 views best unmoved; the fitted 2.0–2.2 px). The
-    // annotated poses are that far from these photographs, so an ADD(-S) below a few
-    // % of the diameter cannot be told from the annotation's own error here.
+    // How far the outlines are from the photographs' strongest edges: the length of
+    // each outline's best move within ±8 px (measured, medians over the 120 views: the
+    // annotated outlines 4.2 px, the fitted 2.2 px). The annotated poses are that far
+    // from these photographs, so an ADD(-S) below a few % of the diameter cannot be
+    // told from the annotation's own error here (BENCHMARKS.md, "Accuracy").
     assert!(
         pooled.offsets.0 + 1.0 <= pooled.offsets.1,
         "all fits: the outlines' median distance to the strongest edges: fitted {:.1} px, annotated {:.1} px",

@@ -199,6 +199,17 @@ fn a_point_after_the_rounds_segments_that_view_again() {
     );
 }
 
+/// `m` moved `by` pixels right (what leaves the image is lost).
+fn moved_right(m: &Mask, by: u32) -> Mask {
+    let mut out = Mask::empty(m.width, m.height);
+    for y in 0..m.height {
+        for x in by..m.width {
+            out.data[(y * m.width + x) as usize] = m.data[(y * m.width + x - by) as usize];
+        }
+    }
+    out
+}
+
 /// Answers with the true silhouette, but in the first round view 2's is moved 30
 /// pixels right (a segmenter that took the wrong object).
 struct Misplaced {
@@ -212,21 +223,12 @@ impl Segmenter for Misplaced {
         Ok(jobs
             .iter()
             .map(|j| {
-                let mut m = self.truth[j.view].clone();
-                if self.calls == 1 && j.view == 2 {
-                    let (w, h) = (m.width, m.height);
-                    let moved: Vec<u8> = (0..w * h)
-                        .map(|i| {
-                            let (x, y) = (i % w, i / w);
-                            if x >= 30 {
-                                self.truth[j.view].data[(y * w + x - 30) as usize]
-                            } else {
-                                0
-                            }
-                        })
-                        .collect();
-                    m.data = moved;
-                }
+                let t = &self.truth[j.view];
+                let m = if self.calls == 1 && j.view == 2 {
+                    moved_right(t, 30)
+                } else {
+                    t.clone()
+                };
                 SegmentOutput::single(in_crop(&m, j.crop), vec![0.0; 16], 0.9)
             })
             .collect())
@@ -328,15 +330,7 @@ impl Segmenter for Wandering {
             .iter()
             .map(|j| {
                 let t = &self.truth[j.view];
-                let mut m = t.clone();
-                if j.view == 2 {
-                    for y in 0..t.height {
-                        for x in 0..t.width {
-                            let from = x.checked_sub(by).map_or(0, |sx| t.data[(y * t.width + sx) as usize]);
-                            m.data[(y * t.width + x) as usize] = from;
-                        }
-                    }
-                }
+                let m = if j.view == 2 { moved_right(t, by) } else { t.clone() };
                 SegmentOutput::single(in_crop(&m, j.crop), vec![0.0; 16], 0.9)
             })
             .collect())
