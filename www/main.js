@@ -15,6 +15,7 @@ const ui = {
 // by the cores (worker.js).
 const poolParam = new URLSearchParams(location.search).get('pool');
 const segParam = new URLSearchParams(location.search).get('segmenters');
+const simdParam = new URLSearchParams(location.search).get('simd');
 
 let worker = null;
 let views = []; // [{ name, width, height, canvas, iou }]
@@ -42,6 +43,7 @@ function startWorker() {
   const url = new URL('./worker.js', import.meta.url);
   if (poolParam !== null) url.searchParams.set('pool', poolParam);
   if (segParam !== null) url.searchParams.set('segmenters', segParam);
+  if (simdParam !== null) url.searchParams.set('simd', simdParam);
   const name = lifelineName('fit');
   worker = new Worker(withLifeline(url, name), { type: 'module' });
   // Its end, however it comes, is seen (lifeline.js).
@@ -472,6 +474,8 @@ function showSegmenting(msg) {
   bar.dataset.finished = msg.finished ? 'true' : 'false';
   // Every run of the encoders so far ({count, ms}), for the tests to print.
   if (msg.encodings) text.dataset.encodings = JSON.stringify(msg.encodings);
+  // The segmenter's build in use: 'relaxed' (relaxed SIMD) or '128'.
+  if (msg.simd) text.dataset.simd = msg.simd;
   // Where the time of a photograph fit went (the worker's phases), for the tests to print.
   if (msg.timings) document.body.dataset.timings = JSON.stringify(msg.timings);
 }

