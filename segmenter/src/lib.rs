@@ -186,47 +186,68 @@ pub struct Decoded {
     pub preferred: usize,
 }
 
+/// The encoder's plan, its input fixed at 1×3×1024².
+fn encoder_plan(bytes: &[u8]) -> Result<Plan> {
+    tract_onnx::onnx()
+        .model_for_read(&mut &*bytes)
+        .map_err(engine)?
+        .with_input_fact(0, f32::fact([1, 3, INPUT, INPUT]).into())
+        .map_err(engine)?
+        .into_optimized()
+        .map_err(engine)?
+        .into_runnable()
+        .map_err(engine)
+}
+
+/// The decoder's plan: its outputs the IoU head and the masks, `orig_im_size` left out
+/// of the inputs (a constant).
+fn decoder_plan(bytes: &[u8]) -> Result<Plan> {
+    let mut decoder = tract_onnx::onnx()
+        .model_for_read(&mut &*bytes)
+        .map_err(engine)?
+        .with_outputs_by_name([IOU_NODE, MASKS_NODE])
+        .map_err(engine)?;
+    let inputs: Vec<String> = decoder
+        .input_outlets()
+        .map_err(engine)?
+        .iter()
+        .map(|o| decoder.node(o.node).name.clone())
+        .filter(|n| n != "orig_im_size")
+        .collect();
+    decoder = decoder.with_input_names(inputs).map_err(engine)?;
+    decoder
+        .into_optimized()
+        .map_err(engine)?
+        .into_runnable()
+        .map_err(engine)
+}
+
 impl Sam {
     /// Loads the encoder and decoder from their ONNX bytes after checking each one's
-    /// SHA-256 (`names`: the files, for errors).
+    /// SHA-256 (`names`: the files, for errors). Natively the two are checked and built
+    /// side by side, on two threads (the decoder on the second); in wasm one after the
+    /// other.
     ///
-    /// Errors: a hash that is not the pinned one; a model the engine refuses.
+    /// Errors: a hash that is not the pinned one (the encoder's named first); a model
+    /// the engine refuses.
     pub fn new(encoder: &[u8], decoder: &[u8], names: [&str; 2]) -> Result<Sam> {
-        check_hash(names[0], encoder, ENCODER_SHA256)?;
-        check_hash(names[1], decoder, DECODER_SHA256)?;
-        Sam::unchecked(encoder, decoder)
-    }
-
-    /// Loads without the hash check (for tests of altered files' errors only).
-    fn unchecked(encoder: &[u8], decoder: &[u8]) -> Result<Sam> {
-        let encoder = tract_onnx::onnx()
-            .model_for_read(&mut &*encoder)
-            .map_err(engine)?
-            .with_input_fact(0, f32::fact([1, 3, INPUT, INPUT]).into())
-            .map_err(engine)?
-            .into_optimized()
-            .map_err(engine)?
-            .into_runnable()
-            .map_err(engine)?;
-        let mut decoder = tract_onnx::onnx()
-            .model_for_read(&mut &*decoder)
-            .map_err(engine)?
-            .with_outputs_by_name([IOU_NODE, MASKS_NODE])
-            .map_err(engine)?;
-        let inputs: Vec<String> = decoder
-            .input_outlets()
-            .map_err(engine)?
-            .iter()
-            .map(|o| decoder.node(o.node).name.clone())
-            .filter(|n| n != "orig_im_size")
-            .collect();
-        decoder = decoder.with_input_names(inputs).map_err(engine)?;
-        let decoder = decoder
-            .into_optimized()
-            .map_err(engine)?
-            .into_runnable()
-            .map_err(engine)?;
-        Ok(Sam { encoder, decoder })
+        let encoder_plan = || check_hash(names[0], encoder, ENCODER_SHA256).and_then(|()| encoder_plan(encoder));
+        let decoder_plan = || check_hash(names[1], decoder, DECODER_SHA256).and_then(|()| decoder_plan(decoder));
+        #[cfg(not(target_arch = "wasm32"))]
+        let (encoder, decoder) = std::thread::scope(|s| {
+            let d = s.spawn(decoder_plan);
+            let e = encoder_plan();
+            let d = d
+                .join()
+                .unwrap_or_else(|_| Err(SegmentError::Engine("the decoder's model: the engine panicked".into())));
+            (e, d)
+        });
+        #[cfg(target_arch = "wasm32")]
+        let (encoder, decoder) = (encoder_plan(), decoder_plan());
+        Ok(Sam {
+            encoder: encoder?,
+            decoder: decoder?,
+        })
     }
 
     /// Encodes a square crop, RGB8 row-major `side × side`, resized to the whole input.
