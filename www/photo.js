@@ -41,15 +41,8 @@ const RELAXED_PROBE = new Uint8Array([
 ]);
 
 // Which build of the module to use: 'relaxed' (relaxed SIMD) or '128' (simd128 alone).
-export function simdBuild(asked = null) {
-  if (asked === '128') return '128';
-  let relaxed = false;
-  try {
-    relaxed = WebAssembly.validate(RELAXED_PROBE);
-  } catch {
-    relaxed = false;
-  }
-  return relaxed ? 'relaxed' : '128';
+function simdBuild(asked) {
+  return asked !== '128' && WebAssembly.validate(RELAXED_PROBE) ? 'relaxed' : '128';
 }
 
 async function compileFile(file) {

@@ -231,19 +231,19 @@ impl Sam {
     /// Errors: a hash that is not the pinned one (the encoder's named first); a model
     /// the engine refuses.
     pub fn new(encoder: &[u8], decoder: &[u8], names: [&str; 2]) -> Result<Sam> {
-        let encoder_plan = || check_hash(names[0], encoder, ENCODER_SHA256).and_then(|()| encoder_plan(encoder));
-        let decoder_plan = || check_hash(names[1], decoder, DECODER_SHA256).and_then(|()| decoder_plan(decoder));
+        let build_encoder = || check_hash(names[0], encoder, ENCODER_SHA256).and_then(|()| encoder_plan(encoder));
+        let build_decoder = || check_hash(names[1], decoder, DECODER_SHA256).and_then(|()| decoder_plan(decoder));
         #[cfg(not(target_arch = "wasm32"))]
         let (encoder, decoder) = std::thread::scope(|s| {
-            let d = s.spawn(decoder_plan);
-            let e = encoder_plan();
+            let d = s.spawn(build_decoder);
+            let e = build_encoder();
             let d = d
                 .join()
                 .unwrap_or_else(|_| Err(SegmentError::Engine("the decoder's model: the engine panicked".into())));
             (e, d)
         });
         #[cfg(target_arch = "wasm32")]
-        let (encoder, decoder) = (encoder_plan(), decoder_plan());
+        let (encoder, decoder) = (build_encoder(), build_decoder());
         Ok(Sam {
             encoder: encoder?,
             decoder: decoder?,
