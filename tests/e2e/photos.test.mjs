@@ -1,8 +1,8 @@
 // End-to-end test of the page's photograph path: real photographs without masks (the
 // example lmo-duck-photos, three Linemod-Occluded views of the duck with boxes on two),
 // a box dragged on the third (or Start clicked at once on the example as it comes), the
-// segmenter's module and weights loaded in the page's
-// Workers (www/pkg-segment/ and www/models/ from scripts/build-segmenter.sh), rounds of
+// segmenter's module and weights loaded in the page's Workers (www/pkg-segment/ and
+// www/models/ from scripts/build-segmenter.sh), rounds of
 // segmenting and fitting to a right pose (verdict ok, or ambiguous naming its rival), a
 // click that corrects a view; and the errors: a missing or altered weights file, a box
 // off its photograph. Needs www/pkg/, the examples (scripts/build-examples.sh, with
