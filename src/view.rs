@@ -59,6 +59,8 @@ pub struct View {
     /// The contour loss's distances capped at this multiple of the mask's equivalent
     /// radius (`None`: uncapped).
     contour_cap: Option<f64>,
+    /// The mask's outline is refined by the photograph's colours (the region term).
+    colour_refined: bool,
 }
 
 impl View {
@@ -124,6 +126,7 @@ impl View {
             image,
             known_area,
             contour_cap: None,
+            colour_refined: false,
         })
     }
 
@@ -202,6 +205,21 @@ impl View {
     /// ([`View::with_contour_cap`]).
     pub fn contour_cap(&self) -> Option<f64> {
         self.contour_cap
+    }
+
+    /// The same view with its mask's outline refined by its photograph's colours (the
+    /// region term, `loss::region`, weighted by `FitSettings::lambda_region`): for a
+    /// mask a segmenter made, which may stray from the object's edge by a few pixels.
+    /// A view without a photograph is unchanged by it.
+    pub fn with_colour_refinement(mut self) -> View {
+        self.colour_refined = true;
+        self
+    }
+
+    /// Whether the fit refines the mask's outline by the photograph's colours
+    /// ([`View::with_colour_refinement`]; only with a photograph).
+    pub fn colour_refined(&self) -> bool {
+        self.colour_refined && self.image.is_some()
     }
 
     /// The same view without its image (to save memory where it is not shown).

@@ -77,6 +77,28 @@ impl SynthScene {
     }
 }
 
+impl SynthScene {
+    /// The scene's views as a segmenter would give them: view i's mask roughened
+    /// ([`roughen`]: σ `sigma_px`, correlation `correlation_px`, seeded `seed + i`), with
+    /// its shaded render as the photograph when there is one, the mask's outline to be
+    /// refined by it ([`crate::view::View::with_colour_refinement`]).
+    ///
+    /// Errors: a mask roughened away ([`Error::EmptyMask`]).
+    pub fn segmented_views(&self, sigma_px: f64, correlation_px: f64, seed: u64) -> Result<Vec<crate::view::View>> {
+        self.cameras
+            .iter()
+            .zip(&self.masks)
+            .enumerate()
+            .map(|(i, (c, m))| {
+                let rough = roughen(m, sigma_px, correlation_px, seed + i as u64);
+                let image = self.images.get(i).cloned();
+                crate::view::View::new(&format!("view{i}"), *c, rough, None, image, &Default::default())
+                    .map(crate::view::View::with_colour_refinement)
+            })
+            .collect()
+    }
+}
+
 /// The hard silhouette of `mesh` at `pose` in `camera`: the mask a perfect segmenter
 /// would give (what [`synthesize`] draws; pixel centres inside the projected mesh).
 pub fn render_mask(mesh: &Mesh, pose: &Pose, camera: &Camera) -> Mask {

@@ -435,6 +435,7 @@ fn time_objective(
         soft: SoftSettings { sigma, eps: 1e-4 },
         lambda_iou: d.lambda_iou,
         lambda_contour: d.lambda_contour,
+        lambda_region: 0.0,
         raster,
     };
     let model = RenderMesh::new(mesh.clone());

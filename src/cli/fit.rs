@@ -61,6 +61,10 @@ pub struct FitOptions {
     /// Weight λ2 of the contour (chamfer-type mean distance) loss (default 1).
     #[arg(long)]
     pub lambda_contour: Option<f64>,
+    /// Weight of the region term — the photograph's colours either side of the outline —
+    /// for the masks the segmenter made (default 1; 0: none; needs λ2 > 0).
+    #[arg(long)]
+    pub lambda_region: Option<f64>,
     /// Optimiser of the refinement stages (default lm).
     #[arg(long, value_enum)]
     pub optimiser: Option<OptimiserArg>,
@@ -150,6 +154,14 @@ impl FitOptions {
         }
         if let Some(l) = self.lambda_contour {
             s.lambda_contour = l;
+        }
+        if let Some(l) = self.lambda_region {
+            if l > 0.0 && s.lambda_contour == 0.0 {
+                return Err(
+                    "--lambda-region needs the contour term it is folded into: --lambda-contour must be > 0".into(),
+                );
+            }
+            s.lambda_region = l;
         }
         if let Some(o) = self.optimiser {
             s.optimiser = match o {

@@ -59,6 +59,7 @@ pub fn run(a: &LossArgs) -> CliResult {
         },
         lambda_iou: a.lambda_iou.unwrap_or(defaults.lambda_iou),
         lambda_contour: a.lambda_contour.unwrap_or(defaults.lambda_contour),
+        lambda_region: 0.0,
         raster: a.raster.map_or(defaults.raster, |r| r.kind()),
     };
     let windows: Vec<Window> = scene.views.iter().map(|v| Window::full(v.camera())).collect();

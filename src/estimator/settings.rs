@@ -36,6 +36,11 @@ pub struct FitSettings {
     pub lambda_iou: f64,
     /// Loss weight λ2 of the contour (chamfer) term (default 1).
     pub lambda_contour: f64,
+    /// Loss weight of the region (colour posterior) term, in the last two stages, of the
+    /// views that ask for it — a segmenter's masks, with their photographs
+    /// ([`crate::View::with_colour_refinement`], `crate::loss::region`; default 1).
+    /// Folded into the contour term: with λ2 = 0 there is none.
+    pub lambda_region: f64,
     /// How the scale is fitted (default anisotropic).
     pub scale_mode: ScaleMode,
     /// Each view's window (default: a square around the mask, 30 % margin on each side).
@@ -68,6 +73,7 @@ impl Default for FitSettings {
             adam: AdamSettings::default(),
             lambda_iou: 1.0,
             lambda_contour: 1.0,
+            lambda_region: 1.0,
             scale_mode: ScaleMode::Anisotropic,
             window: WindowMode::Object { margin: OBJECT_MARGIN },
             tolerance: 1e-3,
@@ -130,10 +136,10 @@ impl FitSettings {
         if let Some(p) = &self.refine_cameras {
             p.validate()?;
         }
-        self.objective(&self.stages[0]).validate()
+        self.stage_objective(self.stages.len() - 1).validate()
     }
 
-    /// The objective's settings at `stage`.
+    /// The objective's settings at `stage` (no region term).
     pub fn objective(&self, stage: &StageSettings) -> ObjectiveSettings {
         ObjectiveSettings {
             soft: SoftSettings {
@@ -142,8 +148,20 @@ impl FitSettings {
             },
             lambda_iou: self.lambda_iou,
             lambda_contour: self.lambda_contour,
+            lambda_region: 0.0,
             raster: self.raster,
         }
+    }
+
+    /// Refinement stage `i`'s objective settings: [`FitSettings::objective`], with the
+    /// region term in the last two stages (a boundary refinement: the coarse stages
+    /// follow the masks alone).
+    pub fn stage_objective(&self, i: usize) -> ObjectiveSettings {
+        let mut o = self.objective(&self.stages[i.min(self.stages.len() - 1)]);
+        if i + 2 >= self.stages.len() {
+            o.lambda_region = self.lambda_region;
+        }
+        o
     }
 }
 

@@ -109,6 +109,7 @@ impl Worker {
         if self.search.is_none() {
             let mut s = setup.settings.clone();
             s.lambda_contour = 0.0;
+            s.lambda_region = 0.0;
             s.lambda_iou = 1.0;
             let o = Objective::new(
                 &setup.views,
@@ -135,7 +136,7 @@ impl Worker {
             self.stage = None;
             let views: Vec<View> = self.mine.iter().map(|&v| setup.views[v].clone()).collect();
             let windows: Vec<Window> = self.mine.iter().map(|&v| setup.windows[v]).collect();
-            let o = Objective::new(&views, &windows, s.resolution, setup.settings.objective(s))?;
+            let o = Objective::new(&views, &windows, s.resolution, setup.settings.stage_objective(stage))?;
             self.stage = Some((stage, o));
         }
         Ok(&mut self.stage.as_mut().expect("set above").1)

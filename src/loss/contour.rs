@@ -135,6 +135,23 @@ impl ContourTarget {
         self.norm
     }
 
+    /// Adds `k` times a term linear in A to this one — per-pixel weights `weight` (its
+    /// ∂/∂A) and value at an empty render `offset` — so that [`ContourTarget::loss`],
+    /// [`ContourTarget::gradient`] and [`ContourTarget::pixel_loss`] are of the sum
+    /// (the region term, `crate::loss::region`), [`ContourTarget::pixel_loss`] is of the sum up to a constant
+    /// (what the Gauss–Newton model needs), and [`ContourTarget::signed_distance`] is no
+    /// longer a distance.
+    ///
+    /// # Panics
+    /// If `weight` has the wrong length.
+    pub fn add_linear(&mut self, weight: &[f64], offset: f64, k: f64) {
+        assert_eq!(weight.len(), self.weight.len(), "one weight per pixel");
+        for (w, r) in self.weight.iter_mut().zip(weight) {
+            *w += k * r;
+        }
+        self.offset += k * offset;
+    }
+
     /// The contour loss of `alpha` (row-major, `width·height` values).
     ///
     /// # Panics

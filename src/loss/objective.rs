@@ -47,6 +47,10 @@ pub struct ObjectiveSettings {
     pub lambda_iou: f64,
     /// λ2, weight of the contour (chamfer) term.
     pub lambda_contour: f64,
+    /// Weight of the region (colour posterior) term of the views that ask for it
+    /// (`crate::loss::region`; 0: none). It is folded into the contour term: with
+    /// λ2 = 0 there is none.
+    pub lambda_region: f64,
     /// The soft rasteriser.
     pub raster: RasterKind,
 }
@@ -55,7 +59,11 @@ impl ObjectiveSettings {
     /// Checks σ, ε and that the weights are finite, non-negative and not both zero.
     pub fn validate(&self) -> Result<()> {
         self.soft.validate()?;
-        for (name, v) in [("lambda_iou", self.lambda_iou), ("lambda_contour", self.lambda_contour)] {
+        for (name, v) in [
+            ("lambda_iou", self.lambda_iou),
+            ("lambda_contour", self.lambda_contour),
+            ("lambda_region", self.lambda_region),
+        ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::Settings(format!(
                     "{name} must be a non-negative number, got {v}"
@@ -165,10 +173,15 @@ impl Objective {
             )));
         }
         let contour = settings.lambda_contour > 0.0;
+        let region = if contour {
+            settings.lambda_region / settings.lambda_contour
+        } else {
+            0.0
+        };
         let targets = views
             .iter()
             .zip(windows)
-            .map(|(v, w)| ViewTarget::new(v, *w, resolution, contour))
+            .map(|(v, w)| ViewTarget::with_region(v, *w, resolution, contour, region))
             .collect::<Result<Vec<_>>>()?;
         Ok(Objective {
             model_union: targets.iter().map(|t| t.area.max(1.0) + UNION_EPS).collect(),

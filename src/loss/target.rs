@@ -6,11 +6,13 @@
 //! pixels are), which canvas pixels are *known* (a pixel whose image pixels are
 //! mostly outside the image or in the ignore mask is unknown and counts in no loss
 //! term and no IoU), the mask's area and centroid, bit masks for the search, and the
-//! contour loss's distance fields when asked for.
+//! contour loss's distance fields when asked for (with, for a view with a photograph,
+//! the region term folded in when asked for).
 
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::loss::contour::ContourTarget;
+use crate::loss::region;
 use crate::mask::Mask;
 use crate::raster::hard::BitMask;
 use crate::view::View;
@@ -114,6 +116,14 @@ impl ViewTarget {
     /// Prepares `view` in `window` at `resolution` pixels across it; with `contour`,
     /// also the contour loss's distance fields.
     pub fn new(view: &View, window: Window, resolution: u32, contour: bool) -> Result<ViewTarget> {
+        ViewTarget::with_region(view, window, resolution, contour, 0.0)
+    }
+
+    /// As [`ViewTarget::new`], with the region term (`crate::loss::region`) of the
+    /// view's photograph folded into the contour term's weights with weight `region`
+    /// relative to it, when `region` > 0, the contour term is asked for and the view
+    /// asks for it ([`View::colour_refined`]).
+    pub fn with_region(view: &View, window: Window, resolution: u32, contour: bool, region: f64) -> Result<ViewTarget> {
         let (w, h) = window.canvas(resolution);
         let camera = window.camera(view.camera(), w, h);
         let (mask, known) = resample(view, &window, w, h);
@@ -128,14 +138,19 @@ impl ViewTarget {
         let (area, centroid) = bits.area_and_centroid();
         let known = (!all_known).then_some(known);
         let contour = if contour && area > 0.0 {
-            Some(ContourTarget::from_parts(
-                w,
-                h,
-                &mask,
-                known.as_deref(),
-                view.contour_cap(),
-                view.name(),
-            )?)
+            let mut c = ContourTarget::from_parts(w, h, &mask, known.as_deref(), view.contour_cap(), view.name())?;
+            if let Some(image) = view.image().filter(|_| region > 0.0 && view.colour_refined()) {
+                let colours = region::canvas_colours(
+                    image,
+                    &overlaps(window.x0, w as f64 / window.width, w as usize),
+                    &overlaps(window.y0, h as f64 / window.height, h as usize),
+                );
+                let term = region::weights(w as usize, h as usize, &colours, &mask, known.as_deref(), region::BAND);
+                if let Some((weights, offset)) = term {
+                    c.add_linear(&weights, offset, region);
+                }
+            }
+            Some(c)
         } else {
             None
         };

@@ -426,8 +426,8 @@ impl PhotoFit {
                         &sources,
                     ) {
                         Ok(v) => match self.photo.contour_cap {
-                            Some(k) => v.with_contour_cap(k),
-                            None => v,
+                            Some(k) => v.with_contour_cap(k).with_colour_refinement(),
+                            None => v.with_colour_refinement(),
                         },
                         Err(Error::EmptyMask { .. }) => {
                             self.warnings.push(format!(

@@ -306,6 +306,18 @@ fn bad_inputs_give_one_clear_line() {
         ]),
         &["--search"],
     );
+    // A negative region weight, and a region term without the contour term it is
+    // folded into.
+    let fit_with = |extra: &[&str]| {
+        let mut args = vec!["fit", scene_path.to_str().unwrap(), "--out", "x.json"];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    assert_error(&fit_with(&["--lambda-region=-1"]), &["lambda_region", "-1"]);
+    assert_error(
+        &fit_with(&["--lambda-contour", "0", "--lambda-region", "1"]),
+        &["--lambda-region", "--lambda-contour"],
+    );
 }
 
 #[test]

@@ -1,13 +1,13 @@
 //! The production objective (`loss::objective::Objective`, what the fit descends),
 //! with both soft rasterisers: the PyTorch3D reference case (SoftRas: silhouettes, IoU
-//! losses, gradient), the exact gradient of λ1·IoU + λ2·contour against central
-//! differences (whole images, object windows, ignored pixels), the Gauss–Newton model
+//! losses, gradient), the exact gradient of λ1·IoU + λ2·contour (and of the region
+//! term) against central differences (whole images, object windows, ignored pixels), the Gauss–Newton model
 //! against its definition with a finite-difference Jacobian, the loss along a path to
 //! the true pose, and (printed, not asserted) timings.
 
 use crate::{data, reference};
 use glam::DVec3;
-use localisebot::app::synth::{blob_mesh, synthesize, SynthSettings};
+use localisebot::app::synth::{blob_mesh, synthesize, SynthScene, SynthSettings};
 use localisebot::loss::objective::{Objective, ObjectiveSettings};
 use localisebot::raster::silhouette::SoftSettings;
 use localisebot::raster::silhouette::{RasterKind, RenderMesh};
@@ -60,6 +60,7 @@ fn settings(sigma: f64, lambda_iou: f64, lambda_contour: f64, raster: RasterKind
         soft: SoftSettings { sigma, eps: 1e-12 },
         lambda_iou,
         lambda_contour,
+        lambda_region: 0.0,
         raster,
     }
 }
@@ -81,6 +82,22 @@ fn fd_gradient(o: &mut Objective, mesh: &RenderMesh, pose: &Pose, h: f64) -> Vec
         .collect()
 }
 
+/// Checks the objective's gradient at `pose` against central differences, and the
+/// Gauss–Newton path's against it; returns the loss.
+fn check_gradient(o: &mut Objective, mesh: &RenderMesh, pose: &Pose, label: &str) -> f64 {
+    let ev = o.value_and_gradient(mesh, pose).unwrap();
+    let fd = fd_gradient(o, mesh, pose, 1e-6);
+    let e = rel_err(&ev.gradient, &fd);
+    println!("{label}: loss {:.6}, gradient relative error {e:.2e}", ev.total);
+    assert!(e < 1e-5, "{label}: {:?}\n{fd:?}", ev.gradient);
+    let (_, ne) = o.normal_equations(mesh, pose).unwrap();
+    assert!(
+        rel_err(&ev.gradient, ne.jtr.as_slice()) < 1e-9,
+        "{label}: the two paths differ"
+    );
+    ev.total
+}
+
 // ---------------------------------------------------------------- PyTorch3D reference
 
 #[test]
@@ -93,6 +110,7 @@ fn objective_matches_the_pytorch3d_reference() {
             soft: SoftSettings::from_ndc(1e-4, size, size),
             lambda_iou: 1.0,
             lambda_contour: 0.0,
+            lambda_region: 0.0,
             raster: RasterKind::SoftRas,
         };
         let mut o = Objective::new(&scene.views, &full(&scene.views), size, s).unwrap();
@@ -143,8 +161,9 @@ fn objective_matches_the_pytorch3d_reference() {
 
 // ---------------------------------------------------------------- gradients
 
-/// A small synthetic scene: the blob in two views, and a pose off the truth.
-fn small_scene(width: u32, height: u32) -> (RenderMesh, Vec<View>, Pose) {
+/// The blob in two views (with shaded photographs when `images`), and a pose off the
+/// truth.
+fn blob_in_two_views(width: u32, height: u32, images: bool) -> (RenderMesh, SynthScene, Pose) {
     let mesh = blob_mesh(8, 12);
     let s = synthesize(
         &mesh,
@@ -153,13 +172,20 @@ fn small_scene(width: u32, height: u32) -> (RenderMesh, Vec<View>, Pose) {
             width,
             height,
             seed: 9,
+            images,
             ..Default::default()
         },
         None,
     )
     .unwrap();
     let off = perturb(&s.pose, &[0.05, -0.08, 0.03, 0.04, -0.03, 0.02, 0.05, -0.05, 0.02]);
-    (RenderMesh::new(mesh), s.views(), off)
+    (RenderMesh::new(mesh), s, off)
+}
+
+/// A small synthetic scene: the blob in two views, and a pose off the truth.
+fn small_scene(width: u32, height: u32) -> (RenderMesh, Vec<View>, Pose) {
+    let (mesh, s, off) = blob_in_two_views(width, height, false);
+    (mesh, s.views(), off)
 }
 
 /// The views with an ignore mask over a block of the first view's object.
@@ -205,22 +231,73 @@ fn objective_gradient_matches_central_differences() {
                 let windows: Vec<Window> = views.iter().map(|v| Window::for_view(v, mode)).collect();
                 let mut o = Objective::new(views, &windows, res, settings(1.5, l1, l2, raster)).unwrap();
                 o.set_weights(&[1.0, 0.4]).unwrap();
-                let ev = o.value_and_gradient(&mesh, &pose).unwrap();
-                let fd = fd_gradient(&mut o, &mesh, &pose, 1e-6);
-                let e = rel_err(&ev.gradient, &fd);
-                println!(
-                    "{raster:?}, {label}, λ = ({l1}, {l2}): loss {:.6}, gradient relative error {e:.2e}",
-                    ev.total
-                );
-                assert!(e < 1e-5, "{raster:?} {label} λ=({l1},{l2}): {:?}\n{fd:?}", ev.gradient);
-                let (_, ne) = o.normal_equations(&mesh, &pose).unwrap();
-                assert!(
-                    rel_err(&ev.gradient, ne.jtr.as_slice()) < 1e-9,
-                    "{raster:?} {label}: the two paths differ"
-                );
+                check_gradient(&mut o, &mesh, &pose, &format!("{raster:?}, {label}, λ = ({l1}, {l2})"));
             }
         }
     }
+}
+
+/// The blob photographed (shaded on a grey gradient) in two views, its masks
+/// roughened as a segmenter's are and asking for the region term; a pose off the truth.
+fn photographed_scene(width: u32, height: u32) -> (RenderMesh, Vec<View>, Pose) {
+    let (mesh, s, off) = blob_in_two_views(width, height, true);
+    (mesh, s.segmented_views(1.5, 6.0, 3).unwrap(), off)
+}
+
+#[test]
+fn region_term_gradient_matches_central_differences() {
+    let (mesh, views, pose) = photographed_scene(48, 40);
+    for raster in RASTERS {
+        for (mode, res) in [(WindowMode::Full, 48), (WindowMode::Object { margin: 0.3 }, 24)] {
+            let windows: Vec<Window> = views.iter().map(|v| Window::for_view(v, mode)).collect();
+            let without = settings(1.5, 1.0, 0.7, raster);
+            let with = ObjectiveSettings {
+                lambda_region: 0.8,
+                ..without
+            };
+            let mut o = Objective::new(&views, &windows, res, with).unwrap();
+            // The term is there: the loss differs from the one without it.
+            let mut plain = Objective::new(&views, &windows, res, without).unwrap();
+            let total = check_gradient(&mut o, &mesh, &pose, &format!("{raster:?}, {mode:?}, region term"));
+            let base = plain.value(&mesh, &pose).unwrap().total;
+            assert!((total - base).abs() > 1e-3, "{raster:?} {mode:?}: {total} vs {base}");
+        }
+    }
+    // A view that does not ask for the term has none, nor has an objective without the
+    // contour term it is folded into.
+    let plain_views: Vec<View> = views.iter().map(|v| v.clone().without_image()).collect();
+    let windows = full(&views);
+    let a = Objective::new(
+        &plain_views,
+        &windows,
+        48,
+        ObjectiveSettings {
+            lambda_region: 0.8,
+            ..settings(1.5, 1.0, 0.7, RasterKind::Edge)
+        },
+    );
+    let b = Objective::new(&plain_views, &windows, 48, settings(1.5, 1.0, 0.7, RasterKind::Edge));
+    let (va, vb) = (
+        a.unwrap().value(&mesh, &pose).unwrap(),
+        b.unwrap().value(&mesh, &pose).unwrap(),
+    );
+    assert_eq!(va.total, vb.total);
+    let no_contour = settings(1.5, 1.0, 0.0, RasterKind::Edge);
+    let mut c = Objective::new(
+        &views,
+        &windows,
+        48,
+        ObjectiveSettings {
+            lambda_region: 0.8,
+            ..no_contour
+        },
+    )
+    .unwrap();
+    let mut d = Objective::new(&views, &windows, 48, no_contour).unwrap();
+    assert_eq!(
+        c.value(&mesh, &pose).unwrap().total,
+        d.value(&mesh, &pose).unwrap().total
+    );
 }
 
 #[test]
@@ -348,6 +425,7 @@ fn objective_falls_along_the_path_to_the_true_pose() {
             soft: SoftSettings::from_ndc(1e-4, 128, 128),
             lambda_iou: 1.0,
             lambda_contour: 1.0,
+            lambda_region: 0.0,
             raster,
         };
         let windows: Vec<Window> = scene.views.iter().map(|v| Window::for_view(v, mode)).collect();

@@ -292,6 +292,8 @@ fn made_masks_are_fitted_with_capped_contour_distances_and_a_bad_cap_is_refused(
     let est = fit.answer(Fake(truth.clone()).segment(&jobs, &[]).unwrap()).unwrap();
     assert_eq!(est.views().len(), 3);
     assert!(est.views().iter().all(|v| v.contour_cap() == Some(0.15)));
+    // And refined by their photographs' colours (the region term).
+    assert!(est.views().iter().all(|v| v.colour_refined()));
     // Uncapped when asked.
     let plain = PhotoSettings {
         contour_cap: None,
@@ -300,7 +302,10 @@ fn made_masks_are_fitted_with_capped_contour_distances_and_a_bad_cap_is_refused(
     let mut fit = PhotoFit::new(scene.clone(), FitSettings::default(), plain).unwrap();
     let jobs = fit.pending().to_vec();
     let est = fit.answer(Fake(truth).segment(&jobs, &[]).unwrap()).unwrap();
-    assert!(est.views().iter().all(|v| v.contour_cap().is_none()));
+    assert!(est
+        .views()
+        .iter()
+        .all(|v| v.contour_cap().is_none() && v.colour_refined()));
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         let s = PhotoSettings {
             contour_cap: Some(bad),
