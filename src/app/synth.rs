@@ -75,9 +75,7 @@ impl SynthScene {
             })
             .collect()
     }
-}
 
-impl SynthScene {
     /// The scene's views as a segmenter would give them: view i's mask roughened
     /// ([`roughen`]: σ `sigma_px`, correlation `correlation_px`, seeded `seed + i`), with
     /// its shaded render as the photograph when there is one, the mask's outline to be

@@ -136,11 +136,11 @@ impl ContourTarget {
     }
 
     /// Adds `k` times a term linear in A to this one — per-pixel weights `weight` (its
-    /// ∂/∂A) and value at an empty render `offset` — so that [`ContourTarget::loss`],
-    /// [`ContourTarget::gradient`] and [`ContourTarget::pixel_loss`] are of the sum
-    /// (the region term, `crate::loss::region`), [`ContourTarget::pixel_loss`] is of the sum up to a constant
-    /// (what the Gauss–Newton model needs), and [`ContourTarget::signed_distance`] is no
-    /// longer a distance.
+    /// ∂/∂A) and value at an empty render `offset` (the region term,
+    /// `crate::loss::region`) — so that [`ContourTarget::loss`] and
+    /// [`ContourTarget::gradient`] are of the sum, [`ContourTarget::pixel_loss`] of the
+    /// sum up to a constant (what the Gauss–Newton model needs), and
+    /// [`ContourTarget::signed_distance`] no longer a distance.
     ///
     /// # Panics
     /// If `weight` has the wrong length.
