@@ -8,7 +8,7 @@
 //! built as `scripts/build-examples.sh` builds it) and a real 640×480 three-view scene
 //! (Linemod-Occluded, imported from `../shared`); and, with the segmenter's weights, its
 //! encoder per crop (alone, and three crops as one mosaic) and the box-to-pose fit of
-//! the same three photographs. Or the same evaluation on a given scene at a given pose.
+//! the same three photographs (also enlarged to a phone's 11 MP). Or the same evaluation on a given scene at a given pose.
 
 use super::files::{load_masked_scene_file, load_mesh, load_pose, CliResult};
 use localisebot::app::shapes;
@@ -276,11 +276,12 @@ fn photo_row(name: &str, scene: &Scene, truth: &Pose, sam: &mut SamSegmenter) ->
     let est = segment::run(&mut photo, sam, |_, _| {}).map_err(|e| e.to_string())?;
     let secs = t0.elapsed().as_secs_f64();
     let r = photo.result(&est, secs, Some(truth));
+    let camera = &scene.photos.first().ok_or("a scene without photographs")?.camera;
     Ok(Row {
         name: name.into(),
         triangles: scene.mesh.triangles.len(),
-        views: 3,
-        size: "640×480".into(),
+        views: scene.photos.len() + scene.views.len(),
+        size: format!("{}×{}", camera.width, camera.height),
         fit_s: Some(secs),
         fit_add_rel: r.errors.map(|e| e.add_rel),
         fit_iou: Some(r.mean_iou),
@@ -347,6 +348,12 @@ fn photos(a: &BenchArgs, mut sam: SamSegmenter, load_s: f64) -> CliResult<Vec<Ro
         },
     ];
     rows.push(photo_row("photos: LM-O duck, 3 boxes", &scene, &truth, &mut sam)?);
+    rows.push(photo_row(
+        "photos: the same, enlarged 6× (a phone's 11 MP)",
+        &enlarged(&scene, 6)?,
+        &truth,
+        &mut sam,
+    )?);
     let (scene, truth) = lmo_boxes(&lmo, 12, &[126, 362, 1087], 12)?;
     rows.push(photo_row(
         "photos: LM-O holepuncher, 3 boxes",
@@ -355,6 +362,32 @@ fn photos(a: &BenchArgs, mut sam: SamSegmenter, load_s: f64) -> CliResult<Vec<Ro
         &mut sam,
     )?);
     Ok(rows)
+}
+
+/// `scene` with its photographs enlarged `k` times (bilinear), their cameras and boxes
+/// with them: what a phone's photographs cost the photograph path.
+fn enlarged(scene: &Scene, k: u32) -> CliResult<Scene> {
+    let mut s = scene.clone();
+    for p in &mut s.photos {
+        let (w, h) = (p.camera.width, p.camera.height);
+        let small = image::RgbaImage::from_raw(w, h, std::mem::take(&mut p.image.data))
+            .ok_or_else(|| format!("view {}: the photograph is not {w}×{h}", p.name))?;
+        let big = image::imageops::resize(&small, k * w, k * h, image::imageops::FilterType::Triangle);
+        p.image = localisebot::Rgba {
+            width: k * w,
+            height: k * h,
+            data: big.into_raw(),
+        };
+        p.camera = p.camera.scaled(k * w, k * h);
+        p.ignore = None;
+        p.hint = p.hint.map(|b| localisebot::PixelBox {
+            x0: b.x0 * k as f64,
+            y0: b.y0 * k as f64,
+            x1: b.x1 * k as f64,
+            y1: b.y1 * k as f64,
+        });
+    }
+    Ok(s)
 }
 
 fn synth_scene(mesh: &Mesh, views: usize, w: u32, h: u32, seed: u64) -> CliResult<localisebot::app::synth::SynthScene> {

@@ -235,6 +235,12 @@ fn deepest(region: &[bool], w: usize, h: usize) -> Option<(DVec2, f64)> {
 /// The re-prompt of a view from a fitted pose (module doc): `silhouette` the pose's
 /// render in the full image, `previous` the last mask made for it (full image) and its
 /// logits, `crop` the square the segmenter saw. `None` when the silhouette is empty.
+///
+/// The distances are measured within the box of the silhouette's and the previous
+/// mask's pixels, one pixel wider on each side the image allows: every pixel beyond it
+/// is farther from a pixel inside it than the nearest pixel of that border, so the
+/// points are the ones the whole image would give, at a cost that follows the object,
+/// not the photograph (a 12-MP one).
 pub fn from_pose(view: usize, crop: Crop, silhouette: &Mask, previous: Option<(&Mask, &[f32])>) -> Option<SegmentJob> {
     let tight = PixelBox::of_mask(silhouette)?;
     let (w, h) = (silhouette.width as usize, silhouette.height as usize);
@@ -247,31 +253,46 @@ pub fn from_pose(view: usize, crop: Crop, silhouette: &Mask, previous: Option<(&
         y1: (tight.y1 + pad).min(h as f64),
     };
     let mut job = SegmentJob::from_box(view, crop, &b);
-    let inside: Vec<bool> = silhouette.data.iter().map(|&s| s != 0).collect();
+    // The window: the silhouette's and the previous mask's pixels, and a border.
+    let mut reach = (
+        tight.x0 as usize,
+        tight.y0 as usize,
+        tight.x1 as usize,
+        tight.y1 as usize,
+    );
+    if let Some((x0, y0, x1, y1)) = previous.and_then(|(m, _)| m.bbox()) {
+        let (x0, y0, x1, y1) = (x0 as usize, y0 as usize, x1 as usize + 1, y1 as usize + 1);
+        reach = (reach.0.min(x0), reach.1.min(y0), reach.2.max(x1), reach.3.max(y1));
+    }
+    let (wx0, wy0) = (reach.0.saturating_sub(1), reach.1.saturating_sub(1));
+    let (ww, wh) = ((reach.2 + 1).min(w) - wx0, (reach.3 + 1).min(h) - wy0);
+    let window = |m: &Mask| -> Vec<bool> {
+        (0..wh)
+            .flat_map(|y| (0..ww).map(move |x| (x, y)))
+            .map(|(x, y)| m.data[(wy0 + y) * w + wx0 + x] != 0)
+            .collect()
+    };
+    let inside = window(silhouette);
     let point = |p: DVec2, object| PromptPoint {
-        at: crop.to_crop(p).to_array(),
+        at: crop.to_crop(p + DVec2::new(wx0 as f64, wy0 as f64)).to_array(),
         object,
     };
+    let prev = previous.map(|(m, logits)| (window(m), logits));
     // On the object: deep inside the silhouette where the previous mask agrees.
-    let agree: Vec<bool> = match previous {
-        Some((m, _)) => inside.iter().zip(&m.data).map(|(&s, &m)| s && m != 0).collect(),
+    let agree: Vec<bool> = match &prev {
+        Some((m, _)) => inside.iter().zip(m).map(|(&s, &m)| s && m).collect(),
         None => inside.clone(),
     };
-    if let Some((p, _)) = deepest(&agree, w, h).or_else(|| deepest(&inside, w, h)) {
+    if let Some((p, _)) = deepest(&agree, ww, wh).or_else(|| deepest(&inside, ww, wh)) {
         job.points.push(point(p, true));
     }
-    if let Some((m, logits)) = previous {
+    if let Some((m, logits)) = prev {
         // Off the object: where the previous mask reaches farthest beyond the silhouette
         // (more than a few pixels: the outline's own uncertainty).
         let margin = (0.04 * tight.size().max_element()).max(3.0);
-        let to_sil = edt::distance(w, h, &inside);
-        let beyond: Vec<bool> = m
-            .data
-            .iter()
-            .zip(&to_sil)
-            .map(|(&m, &d)| m != 0 && d > margin)
-            .collect();
-        if let Some((p, _)) = deepest(&beyond, w, h) {
+        let to_sil = edt::distance(ww, wh, &inside);
+        let beyond: Vec<bool> = m.iter().zip(&to_sil).map(|(&m, &d)| m && d > margin).collect();
+        if let Some((p, _)) = deepest(&beyond, ww, wh) {
             job.points.push(point(p, false));
         }
         job.previous = Some(logits.to_vec());
@@ -396,5 +417,102 @@ mod tests {
         let first = from_pose(0, crop, &sil, None).unwrap();
         assert!(first.points.len() == 1 && first.points[0].object && first.previous.is_none());
         assert!(from_pose(0, crop, &Mask::empty(80, 60), None).is_none());
+    }
+
+    /// The prompt's points as the whole image gives them (the measure before windows):
+    /// image coordinates, on the object or not.
+    fn points_over_the_whole_image(sil: &Mask, prev: Option<&Mask>) -> Vec<([f64; 2], bool)> {
+        let (w, h) = (sil.width as usize, sil.height as usize);
+        let inside: Vec<bool> = sil.data.iter().map(|&s| s != 0).collect();
+        let tight = PixelBox::of_mask(sil).unwrap();
+        let mut out = Vec::new();
+        let agree: Vec<bool> = match prev {
+            Some(m) => inside.iter().zip(&m.data).map(|(&s, &m)| s && m != 0).collect(),
+            None => inside.clone(),
+        };
+        if let Some((p, _)) = deepest(&agree, w, h).or_else(|| deepest(&inside, w, h)) {
+            out.push((p.to_array(), true));
+        }
+        if let Some(m) = prev {
+            let margin = (0.04 * tight.size().max_element()).max(3.0);
+            let to_sil = edt::distance(w, h, &inside);
+            let beyond: Vec<bool> = m
+                .data
+                .iter()
+                .zip(&to_sil)
+                .map(|(&m, &d)| m != 0 && d > margin)
+                .collect();
+            if let Some((p, _)) = deepest(&beyond, w, h) {
+                out.push((p.to_array(), false));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn a_fitted_pose_s_points_are_the_whole_image_s() {
+        let (w, h) = (160u32, 120u32);
+        let union = |a: &Mask, b: &Mask| Mask {
+            width: a.width,
+            height: a.height,
+            data: a.data.iter().zip(&b.data).map(|(&a, &b)| a | b).collect(),
+        };
+        let bar = |x0: u32, y0: u32, x1: u32, y1: u32| {
+            let mut m = Mask::empty(w, h);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    m.data[(y * w + x) as usize] = 1;
+                }
+            }
+            m
+        };
+        let crop = Crop {
+            x0: -20,
+            y0: -30,
+            side: 200,
+        };
+        let cases: Vec<(&str, Mask, Option<Mask>)> = vec![
+            ("a disc alone", disc(w, h, DVec2::new(70.0, 50.0), 18.0), None),
+            (
+                "a disc and a mask beyond it",
+                disc(w, h, DVec2::new(70.0, 50.0), 18.0),
+                Some(union(&disc(w, h, DVec2::new(72.0, 52.0), 17.0), &bar(85, 40, 130, 62))),
+            ),
+            (
+                "at the image's corner",
+                union(&disc(w, h, DVec2::new(5.0, 4.0), 20.0), &bar(0, 0, 12, 40)),
+                Some(union(&disc(w, h, DVec2::new(8.0, 6.0), 21.0), &bar(0, 30, 50, 38))),
+            ),
+            (
+                "the previous mask far off and touching the far border",
+                bar(30, 20, 70, 80),
+                Some(union(&bar(32, 22, 70, 78), &bar(120, 60, 160, 120))),
+            ),
+            ("filling the image", bar(0, 0, w, h), Some(bar(0, 0, w, 100))),
+        ];
+        for (name, sil, prev) in &cases {
+            let logits = [0.0f32; 4];
+            let job = from_pose(0, crop, sil, prev.as_ref().map(|m| (m, &logits[..]))).unwrap();
+            let got: Vec<([f64; 2], bool)> = job
+                .points
+                .iter()
+                .map(|p| {
+                    (
+                        (DVec2::from_array(p.at) + DVec2::new(crop.x0 as f64, crop.y0 as f64)).to_array(),
+                        p.object,
+                    )
+                })
+                .collect();
+            let want = points_over_the_whole_image(sil, prev.as_ref());
+            assert_eq!(got.len(), want.len(), "{name}: {got:?} against {want:?}");
+            for (g, e) in got.iter().zip(&want) {
+                assert_eq!(g.1, e.1, "{name}");
+                assert!(
+                    (g.0[0] - e.0[0]).abs() < 1e-9 && (g.0[1] - e.0[1]).abs() < 1e-9,
+                    "{name}: {got:?} against {want:?}"
+                );
+            }
+            assert!(!got.is_empty() && got[0].1, "{name}: a point on the object");
+        }
     }
 }
