@@ -368,14 +368,18 @@ impl PhotoFit {
                 unreachable!("checked above");
             };
             let (w, h) = (m.photo.camera.width, m.photo.camera.height);
-            let mut masks: Vec<(Mask, MaskCandidate)> = out
-                .candidates
-                .into_iter()
-                .map(|c| (job.crop.to_image(&c.mask, w, h), c))
-                .collect();
-            let pick = choose(&masks, out.preferred, m.reference.take().as_ref(), &m.points);
+            let mut candidates = out.candidates;
+            let pick = choose(
+                &job.crop,
+                &candidates,
+                out.preferred,
+                m.reference.take().as_ref(),
+                &m.points,
+                (w, h),
+            );
             m.report.picks.push(pick);
-            let (mask, chosen) = masks.swap_remove(pick);
+            let chosen = candidates.swap_remove(pick);
+            let mask = job.crop.to_image(&chosen.mask, w, h);
             if let Some((prev, _)) = &m.mask {
                 let change = metrics::hard_iou(prev, &mask);
                 all_converged &= change >= self.photo.converged_iou;
@@ -617,36 +621,44 @@ fn reprompt(mesh: &Mesh, pose: &Pose, view: usize, m: &mut Made, margin: f64) ->
     job
 }
 
-/// Which of the segmenter's masks to take: the one that keeps most of the user's
-/// points on the right side; among those, the segmenter's choice or — once there is a
-/// fit — the reading that agrees best with the fitted silhouette.
+/// Which of the segmenter's masks (of `crop`, in an image of `w × h`) to take: the one
+/// that keeps most of the user's points on the right side; among those, the
+/// segmenter's choice or — once there is a fit — the reading that agrees best with the
+/// fitted silhouette (compared within the crop: [`Crop::iou_in_image`]).
 fn choose(
-    masks: &[(Mask, MaskCandidate)],
+    crop: &Crop,
+    candidates: &[MaskCandidate],
     preferred: usize,
     reference: Option<&Mask>,
     points: &[(DVec2, bool)],
+    (w, h): (u32, u32),
 ) -> usize {
     let kept = |m: &Mask| {
         points
             .iter()
             .filter(|(p, on)| {
                 let (x, y) = (p.x.round(), p.y.round());
-                let inside = x >= 0.0 && y >= 0.0 && m.get(x as u32, y as u32);
+                let in_image = x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64;
+                let inside = in_image && crop.holds_pixel(m, x as i64, y as i64);
                 inside == *on
             })
             .count()
     };
-    let best_kept = masks.iter().map(|(m, _)| kept(m)).max().unwrap_or(0);
-    let eligible = |i: &usize| kept(&masks[*i].0) == best_kept;
+    let best_kept = candidates.iter().map(|c| kept(&c.mask)).max().unwrap_or(0);
+    let eligible = |i: &usize| kept(&candidates[*i].mask) == best_kept;
     match reference {
-        Some(r) => (0..masks.len())
-            .filter(eligible)
-            .max_by(|&a, &b| metrics::hard_iou(&masks[a].0, r).total_cmp(&metrics::hard_iou(&masks[b].0, r)))
-            .expect("candidates checked non-empty"),
+        Some(r) => {
+            let area = r.area();
+            let iou: Vec<f64> = candidates.iter().map(|c| crop.iou_in_image(&c.mask, r, area)).collect();
+            (0..candidates.len())
+                .filter(eligible)
+                .max_by(|&a, &b| iou[a].total_cmp(&iou[b]))
+                .expect("candidates checked non-empty")
+        }
         None if eligible(&preferred) => preferred,
-        None => (0..masks.len())
+        None => (0..candidates.len())
             .filter(eligible)
-            .max_by(|&a, &b| masks[a].1.score.total_cmp(&masks[b].1.score))
+            .max_by(|&a, &b| candidates[a].score.total_cmp(&candidates[b].score))
             .expect("candidates checked non-empty"),
     }
 }

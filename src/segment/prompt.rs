@@ -103,6 +103,43 @@ impl Crop {
         out
     }
 
+    /// The IoU of a crop-sized mask, placed back into `reference`'s image (what falls
+    /// outside it dropped), with `reference`: [`hard_iou`](crate::metrics::hard_iou) of
+    /// [`Crop::to_image`]'s mask, counted over the crop alone (a 12-MP photograph's
+    /// masks are not made to compare them); `reference_area`: its [`Mask::area`].
+    pub fn iou_in_image(&self, crop_mask: &Mask, reference: &Mask, reference_area: usize) -> f64 {
+        let (w, h) = (reference.width as i64, reference.height as i64);
+        let (mut inter, mut area) = (0usize, 0usize);
+        for y in 0..crop_mask.height as i64 {
+            let iy = self.y0 + y;
+            if iy < 0 || iy >= h {
+                continue;
+            }
+            for x in 0..crop_mask.width as i64 {
+                let ix = self.x0 + x;
+                if ix >= 0 && ix < w && crop_mask.get(x as u32, y as u32) {
+                    area += 1;
+                    inter += usize::from(reference.data[(iy * w + ix) as usize] != 0);
+                }
+            }
+        }
+        let union = area + reference_area - inter;
+        if union == 0 {
+            0.0
+        } else {
+            inter as f64 / union as f64
+        }
+    }
+
+    /// Whether image pixel `(x, y)` is set in a crop-sized mask placed back into the
+    /// image (false outside the crop; the caller checks the image's bounds).
+    pub fn holds_pixel(&self, crop_mask: &Mask, x: i64, y: i64) -> bool {
+        let (cx, cy) = (x - self.x0, y - self.y0);
+        (0..crop_mask.width as i64).contains(&cx)
+            && (0..crop_mask.height as i64).contains(&cy)
+            && crop_mask.get(cx as u32, cy as u32)
+    }
+
     /// A crop-sized mask placed back into an image of `width × height` (what falls
     /// outside the image is dropped).
     pub fn to_image(&self, crop_mask: &Mask, width: u32, height: u32) -> Mask {
@@ -514,5 +551,56 @@ mod tests {
             }
             assert!(!got.is_empty() && got[0].1, "{name}: a point on the object");
         }
+    }
+
+    #[test]
+    fn a_crop_s_mask_compares_with_the_image_s_as_placed_back() {
+        let (w, h) = (90u32, 70u32);
+        let reference = disc(w, h, DVec2::new(20.0, 30.0), 14.0);
+        let area = reference.area();
+        // Crops inside the image, past its top-left corner, past its bottom-right one.
+        for crop in [
+            Crop {
+                x0: 5,
+                y0: 10,
+                side: 40,
+            },
+            Crop {
+                x0: -12,
+                y0: -8,
+                side: 50,
+            },
+            Crop {
+                x0: 60,
+                y0: 45,
+                side: 40,
+            },
+        ] {
+            for (c, r) in [
+                (DVec2::new(22.0, 20.0), 12.0),
+                (DVec2::new(5.0, 5.0), 30.0),
+                (DVec2::new(0.0, 0.0), 0.0),
+            ] {
+                let m = disc(crop.side, crop.side, c, r);
+                let placed = crop.to_image(&m, w, h);
+                let want = crate::metrics::hard_iou(&placed, &reference);
+                let got = crop.iou_in_image(&m, &reference, area);
+                assert!(
+                    (got - want).abs() < 1e-12,
+                    "{crop:?}, disc at {c} r {r}: {got} against {want}"
+                );
+                for (x, y) in [(0, 0), (10, 12), (25, 30), (70, 60), (89, 69)] {
+                    assert_eq!(
+                        crop.holds_pixel(&m, x, y),
+                        placed.get(x as u32, y as u32),
+                        "{crop:?} ({x}, {y})"
+                    );
+                }
+            }
+        }
+        // Nothing in either: 0, as hard_iou says.
+        let empty = Mask::empty(w, h);
+        let c = Crop { x0: 0, y0: 0, side: 10 };
+        assert_eq!(c.iou_in_image(&Mask::empty(10, 10), &empty, 0), 0.0);
     }
 }
