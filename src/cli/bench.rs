@@ -8,7 +8,8 @@
 //! built as `scripts/build-examples.sh` builds it) and a real 640×480 three-view scene
 //! (Linemod-Occluded, imported from `../shared`); and, with the segmenter's weights, its
 //! encoder per crop (alone, and three crops as one mosaic) and the box-to-pose fit of
-//! the same three photographs (also enlarged to a phone's 11 MP). Or the same evaluation on a given scene at a given pose.
+//! the same three photographs (and of them enlarged to a phone's 11 MP). Or the same
+//! evaluation on a given scene at a given pose.
 
 use super::files::{load_masked_scene_file, load_mesh, load_pose, CliResult};
 use localisebot::app::shapes;
