@@ -114,6 +114,20 @@ impl Mask {
 }
 
 #[cfg(test)]
+impl Mask {
+    /// The pixels (x, y) within `r` of (`cx`, `cy`), in a `w × h` mask (for tests).
+    pub(crate) fn disc(w: u32, h: u32, cx: f64, cy: f64, r: f64) -> Mask {
+        let mut m = Mask::empty(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                m.data[(y * w + x) as usize] = u8::from((x as f64 - cx).powi(2) + (y as f64 - cy).powi(2) <= r * r);
+            }
+        }
+        m
+    }
+}
+
+#[cfg(test)]
 mod tests {
     use super::*;
 

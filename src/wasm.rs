@@ -147,8 +147,11 @@ export interface MaskReport {
   /** Which of the segmenter's readings each round took. */
   picks: number[];
   score: number;
-  /** IoU of the final mask with the final pose's silhouette. */
+  /** IoU of the segmenter's final mask with the final pose's silhouette. */
   iou_with_fit: number;
+  /** The returned mask: the final pose's silhouette where the segmenter saw the
+   * object ("fit"), or the segmenter's own ("segmenter", when they disagree). */
+  returned: "fit" | "segmenter";
 }
 /** The result of a fit (SPEC §3). */
 export interface FitResult {

@@ -9,6 +9,7 @@ use super::fit::{encode_mask, FitOptions};
 use super::segmenter::fit_photographs;
 use clap::Args;
 use localisebot::io::scene::SceneJson;
+use localisebot::Mask;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `segment`.
@@ -65,12 +66,22 @@ pub fn run(a: &SegmentArgs) -> CliResult {
     let reports = photo.reports(Some(&est.pose()));
     write(&a.out.join("scene.json"), to_json(&wire).as_bytes())?;
     for r in &reports {
+        let area = masks
+            .iter()
+            .find(|(n, _)| *n == r.view)
+            .and_then(|(_, m)| m.map(Mask::area))
+            .unwrap_or(0);
+        let what = match r.returned.as_str() {
+            "fit" => "the fitted silhouette where the segmenter saw the object",
+            _ => "the segmenter's (the fit disagrees)",
+        };
+        let boxed = match r.first_box_from.as_str() {
+            "box" => "its box",
+            _ => "a box from the geometry",
+        };
         eprintln!(
-            "  view '{}': mask from its {} box, {} px, IoU with the fit's silhouette {:.3}",
-            r.view,
-            r.first_box_from,
-            r.areas.last().copied().unwrap_or(0),
-            r.iou_with_fit
+            "  view '{}' (from {boxed}): {what}, {area} px; the segmenter's IoU with the fit's silhouette {:.3}",
+            r.view, r.iou_with_fit
         );
     }
     println!(

@@ -181,8 +181,13 @@ pub struct MaskReport {
     pub picks: Vec<usize>,
     /// The segmenter's own IoU estimate for the final mask.
     pub score: f32,
-    /// IoU of the final mask with the silhouette of the final pose.
+    /// IoU of the segmenter's final mask with the silhouette of the final pose.
     pub iou_with_fit: f64,
+    /// What the returned mask is: `"fit"`, the final pose's silhouette where the
+    /// segmenter saw the object (`segment::photo::visible`), or `"segmenter"`, the
+    /// segmenter's own final mask (when the two disagree: `iou_with_fit` below 0.5).
+    #[serde(default)]
+    pub returned: String,
 }
 
 fn anisotropic() -> ScaleMode {

@@ -178,40 +178,28 @@ impl ContourTarget {
 mod tests {
     use super::*;
 
-    fn disc(w: u32, h: u32, cx: f64, cy: f64, r: f64) -> Mask {
-        let mut m = Mask::empty(w, h);
-        for y in 0..h {
-            for x in 0..w {
-                if (x as f64 - cx).powi(2) + (y as f64 - cy).powi(2) <= r * r {
-                    m.data[(y * w + x) as usize] = 1;
-                }
-            }
-        }
-        m
-    }
-
     fn as_alpha(m: &Mask) -> Vec<f64> {
         m.data.iter().map(|&v| v as f64).collect()
     }
 
     #[test]
     fn zero_when_aligned_and_growing_with_the_shift() {
-        let target = ContourTarget::new(&disc(96, 96, 40.0, 44.0, 20.0), "v").unwrap();
-        assert!(target.loss(&as_alpha(&disc(96, 96, 40.0, 44.0, 20.0))) < 1e-12);
+        let target = ContourTarget::new(&Mask::disc(96, 96, 40.0, 44.0, 20.0), "v").unwrap();
+        assert!(target.loss(&as_alpha(&Mask::disc(96, 96, 40.0, 44.0, 20.0))) < 1e-12);
         let mut last = 0.0;
         for shift in [2.0, 5.0, 10.0, 30.0, 45.0] {
-            let l = target.loss(&as_alpha(&disc(96, 96, 40.0 + shift, 44.0, 20.0)));
+            let l = target.loss(&as_alpha(&Mask::disc(96, 96, 40.0 + shift, 44.0, 20.0)));
             assert!(l > last, "shift {shift}: {l} after {last}");
             last = l;
         }
         // ½(δ/r)² for a small shift, within the discretisation.
-        let l = target.loss(&as_alpha(&disc(96, 96, 44.0, 44.0, 20.0)));
+        let l = target.loss(&as_alpha(&Mask::disc(96, 96, 44.0, 44.0, 20.0)));
         assert!((l / (0.5 * 0.04) - 1.0).abs() < 0.25, "{l}");
     }
 
     #[test]
     fn a_capped_target_charges_a_far_render_by_its_area_and_a_near_one_as_before() {
-        let m = disc(128, 96, 50.0, 48.0, 20.0);
+        let m = Mask::disc(128, 96, 50.0, 48.0, 20.0);
         let r = (m.area() as f64 / std::f64::consts::PI).sqrt();
         let plain = ContourTarget::new(&m, "v").unwrap();
         let capped = ContourTarget::from_parts(128, 96, &m.data, None, Some(0.15), "v").unwrap();
@@ -220,7 +208,7 @@ mod tests {
         assert!(capped.gradient().iter().all(|w| (w * capped.norm).abs() <= cap + 1e-9));
         assert!(plain.gradient().iter().any(|w| (w * plain.norm).abs() > 2.0 * cap));
         // Within the cap, the same loss: a render a pixel off.
-        let near = as_alpha(&disc(128, 96, 51.0, 48.0, 20.0));
+        let near = as_alpha(&Mask::disc(128, 96, 51.0, 48.0, 20.0));
         assert!((capped.loss(&near) - plain.loss(&near)).abs() < 1e-12);
         // A thin part the mask misses (a spout 30 px long, 2 px wide): uncapped it costs
         // its reach, capped at most cap·area/N.
@@ -251,16 +239,16 @@ mod tests {
 
     #[test]
     fn resolution_independent() {
-        let small = ContourTarget::new(&disc(64, 64, 30.0, 32.0, 12.0), "v").unwrap();
-        let big = ContourTarget::new(&disc(256, 256, 120.0, 128.0, 48.0), "v").unwrap();
-        let ls = small.loss(&as_alpha(&disc(64, 64, 33.0, 32.0, 12.0)));
-        let lb = big.loss(&as_alpha(&disc(256, 256, 132.0, 128.0, 48.0)));
+        let small = ContourTarget::new(&Mask::disc(64, 64, 30.0, 32.0, 12.0), "v").unwrap();
+        let big = ContourTarget::new(&Mask::disc(256, 256, 120.0, 128.0, 48.0), "v").unwrap();
+        let ls = small.loss(&as_alpha(&Mask::disc(64, 64, 33.0, 32.0, 12.0)));
+        let lb = big.loss(&as_alpha(&Mask::disc(256, 256, 132.0, 128.0, 48.0)));
         assert!((ls / lb - 1.0).abs() < 0.2, "{ls} vs {lb}");
     }
 
     #[test]
     fn gradient_matches_central_differences_and_empty_mask_is_named() {
-        let t = ContourTarget::new(&disc(20, 16, 8.0, 7.0, 4.0), "v").unwrap();
+        let t = ContourTarget::new(&Mask::disc(20, 16, 8.0, 7.0, 4.0), "v").unwrap();
         let a: Vec<f64> = (0..320).map(|i| (i as f64 * 0.13).cos() * 0.5 + 0.5).collect();
         let mut g = vec![0.0; 320];
         let l = t.loss_grad(&a, 3.0, &mut g);

@@ -113,6 +113,9 @@ struct Made {
     crop: Crop,
     /// The latest mask (full image) and its logits, once made.
     mask: Option<(Mask, Vec<f32>)>,
+    /// Once the rounds are over, the mask returned when it is not the segmenter's: the
+    /// fitted silhouette where the segmenter saw the object ([`visible`]).
+    returned: Option<Mask>,
     /// The fitted pose's silhouette the pending job was prompted from (the segmenter's
     /// masks are chosen by it).
     reference: Option<Mask>,
@@ -195,6 +198,7 @@ impl PhotoFit {
                 slots.push(Slot::Made(Made {
                     crop: Crop { x0: 0, y0: 0, side: 0 },
                     mask: None,
+                    returned: None,
                     reference: None,
                     points: Vec::new(),
                     report: MaskReport {
@@ -206,6 +210,7 @@ impl PhotoFit {
                         picks: Vec::new(),
                         score: 0.0,
                         iou_with_fit: 0.0,
+                        returned: String::new(),
                     },
                     photo: p,
                 }));
@@ -363,6 +368,11 @@ impl PhotoFit {
             }
         }
         let mut all_converged = self.round > 0;
+        for s in &mut self.slots {
+            if let Slot::Made(m) = s {
+                m.returned = None;
+            }
+        }
         for (job, out) in std::mem::take(&mut self.pending).into_iter().zip(outputs) {
             let Some(Slot::Made(m)) = self.slots.get_mut(job.view) else {
                 unreachable!("checked above");
@@ -486,6 +496,7 @@ impl PhotoFit {
             (found, Vec::new())
         };
         if last {
+            self.return_visible(&pose);
             self.state = State::Done;
             return Ok(());
         }
@@ -519,6 +530,21 @@ impl PhotoFit {
         Ok(())
     }
 
+    /// The masks to return, once the rounds are over: each made view's silhouette at
+    /// the final `pose` where the segmenter saw the object ([`visible`]) — unless the
+    /// two disagree (IoU below 0.5) or nothing would be left: then the segmenter's own.
+    fn return_visible(&mut self, pose: &Pose) {
+        for s in &mut self.slots {
+            let Slot::Made(m) = s else { continue };
+            let Some((mask, _)) = &m.mask else { continue };
+            let silhouette = hard::render(&self.mesh, pose, &m.photo.camera);
+            if metrics::hard_iou(mask, &silhouette) >= 0.5 {
+                let v = visible::visible(&silhouette, mask);
+                m.returned = (v.area() > 0).then_some(v);
+            }
+        }
+    }
+
     /// Whether the rounds are over.
     pub fn is_done(&self) -> bool {
         self.state == State::Done
@@ -535,9 +561,26 @@ impl PhotoFit {
         self.round
     }
 
-    /// Each scene view's mask as it stands (given or made; `None` before it is made),
-    /// with the view's name, in scene order.
+    /// Each scene view's mask as it stands, with the view's name, in scene order: given,
+    /// or made — the segmenter's during the rounds (`None` before it is made), and once
+    /// they are over, the fitted silhouette where the segmenter saw the object
+    /// ([`visible`]; [`MaskReport::returned`] says which).
     pub fn masks(&self) -> Vec<(&str, Option<&Mask>)> {
+        self.slots
+            .iter()
+            .map(|s| match s {
+                Slot::Given(v) => (v.name(), Some(v.mask())),
+                Slot::Made(m) => (
+                    m.photo.name.as_str(),
+                    m.returned.as_ref().or(m.mask.as_ref().map(|(k, _)| k)),
+                ),
+            })
+            .collect()
+    }
+
+    /// As [`PhotoFit::masks`], but each made view's latest mask from the segmenter
+    /// even after the rounds (what the fits were given).
+    pub fn segmenter_masks(&self) -> Vec<(&str, Option<&Mask>)> {
         self.slots
             .iter()
             .map(|s| match s {
@@ -555,6 +598,7 @@ impl PhotoFit {
             .filter_map(|s| match s {
                 Slot::Made(m) => {
                     let mut r = m.report.clone();
+                    r.returned = if m.returned.is_some() { "fit" } else { "segmenter" }.into();
                     if let (Some(p), Some((mask, _))) = (pose, &m.mask) {
                         r.iou_with_fit = metrics::hard_iou(mask, &hard::render(&self.mesh, p, &m.photo.camera));
                     }
@@ -697,3 +741,4 @@ pub fn run(
 mod boxes;
 #[cfg(test)]
 mod tests;
+pub mod visible;

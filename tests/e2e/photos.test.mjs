@@ -107,6 +107,8 @@ test('photographs: boxes on two views, the third proposed then dragged; Start se
   assert.equal(result.masks.length, 3);
   assert.deepEqual(result.masks.map((m) => m.first_box_from), ['box', 'box', 'box']);
   for (const m of result.masks) assert.ok(m.iou_with_fit > 0.8, `view ${m.view}: mask against the fit ${m.iou_with_fit}`);
+  // The masks returned: the fitted silhouettes where the segmenter saw the object.
+  assert.deepEqual(result.masks.map((m) => m.returned), ['fit', 'fit', 'fit']);
   const truth = result.errors;
   const fromLoad = (Date.now() - page.loadedAt) / 1000;
   console.log(`  box to pose in the page: ${wall.toFixed(1)} s from Start, ${fromLoad.toFixed(1)} s from Load (the box dragged `

@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::app::{shapes, synth};
+use crate::camera::Camera;
 use crate::io::scene::SceneJson;
 
 /// A mask of the image cut to `crop` (what a perfect segmenter returns).
@@ -107,8 +108,23 @@ fn the_fit_chooses_the_reading_that_agrees_with_the_geometry() {
     assert_eq!(reports[0].picks.first(), Some(&0), "{:?}", reports[0].picks);
     assert_eq!(reports[0].picks.last(), Some(&1), "{:?}", reports[0].picks);
     assert!(fit.rounds() >= 2);
-    for ((name, mask), t) in fit.masks().iter().zip(&truth) {
+    for ((name, mask), t) in fit.segmenter_masks().iter().zip(&truth) {
         assert_eq!(metrics::hard_iou(mask.unwrap(), t), 1.0, "{name}");
+    }
+    // What is returned: the fitted silhouettes (the segmenter saw the whole object).
+    let cameras: Vec<Camera> = fit
+        .slots
+        .iter()
+        .map(|s| match s {
+            Slot::Made(m) => m.photo.camera,
+            Slot::Given(v) => *v.camera(),
+        })
+        .collect();
+    for ((((name, mask), t), r), c) in fit.masks().iter().zip(&truth).zip(&reports).zip(&cameras) {
+        let silhouette = hard::render(&fit.mesh, &est.pose(), c);
+        assert_eq!(mask.unwrap(), &silhouette, "{name}");
+        assert!(metrics::hard_iou(mask.unwrap(), t) > 0.97, "{name}");
+        assert_eq!(r.returned, "fit");
     }
     let r = fit.result(&est, 0.0, None);
     assert_eq!(r.verdict, Some(Verdict::Ok));
