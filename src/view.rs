@@ -11,6 +11,7 @@
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::mask::Mask;
+use std::sync::Arc;
 
 /// An RGBA8 image, row-major, row 0 at the top.
 #[derive(Debug, Clone, PartialEq)]
@@ -53,7 +54,8 @@ pub struct View {
     camera: Camera,
     mask: Mask,
     ignore: Option<Mask>,
-    image: Option<Rgba>,
+    /// Shared: a photograph's views of successive fits hold one copy.
+    image: Option<Arc<Rgba>>,
     /// Object pixels of the mask that are not ignored.
     known_area: usize,
     /// The contour loss's distances capped at this multiple of the mask's equivalent
@@ -75,6 +77,21 @@ impl View {
         mask: Mask,
         ignore: Option<Mask>,
         image: Option<Rgba>,
+        sources: &ViewSources,
+    ) -> Result<View> {
+        View::sharing(name, camera, mask, ignore, image.map(Arc::new), sources)
+    }
+
+    /// As [`View::new`], with a photograph shared with other views (a made mask's view
+    /// in each round's fit: no copy of a phone's 48 MB per view and round).
+    ///
+    /// Errors: those of [`View::new`].
+    pub fn sharing(
+        name: &str,
+        camera: Camera,
+        mask: Mask,
+        ignore: Option<Mask>,
+        image: Option<Arc<Rgba>>,
         sources: &ViewSources,
     ) -> Result<View> {
         let expected = (camera.width, camera.height);
@@ -165,7 +182,7 @@ impl View {
 
     /// The photograph, when given.
     pub fn image(&self) -> Option<&Rgba> {
-        self.image.as_ref()
+        self.image.as_deref()
     }
 
     /// Object pixels of the mask that are not ignored (> 0).
@@ -322,8 +339,8 @@ pub struct PhotoView {
     pub name: String,
     /// The camera (OpenCV axes).
     pub camera: Camera,
-    /// The photograph, the camera's size.
-    pub image: Rgba,
+    /// The photograph, the camera's size (shared with the views of the rounds' fits).
+    pub image: Arc<Rgba>,
     /// Unknown pixels, when given.
     pub ignore: Option<Mask>,
     /// The box around the object, when given.

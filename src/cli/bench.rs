@@ -371,14 +371,15 @@ fn enlarged(scene: &Scene, k: u32) -> CliResult<Scene> {
     let mut s = scene.clone();
     for p in &mut s.photos {
         let (w, h) = (p.camera.width, p.camera.height);
-        let small = image::RgbaImage::from_raw(w, h, std::mem::take(&mut p.image.data))
+        let small = image::RgbaImage::from_raw(w, h, p.image.data.clone())
             .ok_or_else(|| format!("view {}: the photograph is not {w}×{h}", p.name))?;
         let big = image::imageops::resize(&small, k * w, k * h, image::imageops::FilterType::Triangle);
         p.image = localisebot::Rgba {
             width: k * w,
             height: k * h,
             data: big.into_raw(),
-        };
+        }
+        .into();
         p.camera = p.camera.scaled(k * w, k * h);
         p.ignore = None;
         p.hint = p.hint.map(|b| localisebot::PixelBox {

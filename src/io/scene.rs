@@ -239,7 +239,7 @@ pub fn scene_from_parts(
             photos.push(PhotoView {
                 name: vj.name.clone(),
                 camera,
-                image: image.expect("checked above"),
+                image: image.expect("checked above").into(),
                 ignore,
                 hint,
                 index: i,

@@ -323,7 +323,7 @@ impl PhotoFit {
     /// The photograph of scene view `view` (for a segmenter), if it is a made one.
     pub fn image(&self, view: usize) -> Option<&Rgba> {
         match self.slots.get(view) {
-            Some(Slot::Made(m)) => Some(&m.photo.image),
+            Some(Slot::Made(m)) => Some(m.photo.image.as_ref()),
             _ => None,
         }
     }
@@ -431,7 +431,7 @@ impl PhotoFit {
                     let Some((mask, _)) = m.mask.as_ref() else { continue };
                     let p = &m.photo;
                     let sources = ViewSources::files("(made by the segmenter)", "ignore mask", "photograph");
-                    match View::new(
+                    match View::sharing(
                         &p.name,
                         p.camera,
                         mask.clone(),

@@ -232,7 +232,7 @@ fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, wit
     let mesh = scene.mesh.clone();
     assert_eq!(scene.photos.len(), 3);
     let cameras: Vec<Camera> = scene.photos.iter().map(|p| p.camera).collect();
-    let pictures: Vec<Rgba> = scene.photos.iter().map(|p| p.image.clone()).collect();
+    let pictures: Vec<std::sync::Arc<Rgba>> = scene.photos.iter().map(|p| p.image.clone()).collect();
     let t0 = std::time::Instant::now();
     let mut photo = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
     // The made masks' median IoU against the annotated ones after each segmentation.
@@ -271,7 +271,7 @@ fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, wit
     let made: Vec<Option<&Mask>> = photo.segmenter_masks().into_iter().map(|(_, m)| m).collect();
     let fitted_explains = explains(&mesh, &pose, &cameras, &made);
     let truth_explains = explains(&mesh, &truth, &cameras, &made);
-    let grads: Vec<Vec<f64>> = pictures.iter().map(gradient).collect();
+    let grads: Vec<Vec<f64>> = pictures.iter().map(|p| gradient(p)).collect();
     let (fitted_edges, fitted_offsets): (Vec<f64>, Vec<f64>) =
         edges(&mesh, &pose, &cameras, &grads).into_iter().unzip();
     let (truth_edges, truth_offsets): (Vec<f64>, Vec<f64>) = edges(&mesh, &truth, &cameras, &grads).into_iter().unzip();

@@ -70,7 +70,7 @@ fn scene() -> (Scene, Vec<Mask>) {
         .map(|i| PhotoView {
             name: format!("view{i}"),
             camera: made.cameras[i],
-            image: made.images[i].clone(),
+            image: made.images[i].clone().into(),
             ignore: None,
             hint: PixelBox::of_mask(&made.masks[i]),
             index: i,
