@@ -13,7 +13,9 @@ use localisebot::io::bop::{self, BopOptions, BoxHints, MaskKind};
 use localisebot::io::mask::decode_mask;
 use localisebot::raster::hard;
 use localisebot::segment::{self, PhotoFit, PhotoSettings, SamSegmenter};
-use localisebot::{load_scene, metrics, Camera, FitSettings, Mask, Pose, Rgba, Scene, Verdict};
+use localisebot::{
+    load_scene, metrics, Camera, Estimator, FitSettings, Mask, Pose, Rgba, Scene, Verdict, View, ViewSources,
+};
 
 /// The views of `real.rs`, and whether the object is symmetric (ADD-S).
 const SETS: [(u32, [u32; 3], bool); 8] = [
@@ -142,6 +144,14 @@ fn gradient(im: &Rgba) -> Vec<f64> {
 /// strongest edges (its length, px). An independent check of where the object is in a
 /// photograph — no segmenter's mask enters it.
 fn edges(mesh: &localisebot::Mesh, pose: &Pose, cameras: &[Camera], grads: &[Vec<f64>]) -> Vec<(f64, f64)> {
+    edge_moves(mesh, pose, cameras, grads)
+        .into_iter()
+        .map(|(e, (dx, dy))| (e, ((dx * dx + dy * dy) as f64).sqrt()))
+        .collect()
+}
+
+/// As [`edges`], with the move itself (px, x and y).
+fn edge_moves(mesh: &localisebot::Mesh, pose: &Pose, cameras: &[Camera], grads: &[Vec<f64>]) -> Vec<(f64, (i64, i64))> {
     const REACH: i64 = 8;
     cameras
         .iter()
@@ -174,12 +184,12 @@ fn edges(mesh: &localisebot::Mesh, pose: &Pose, cameras: &[Camera], grads: &[Vec
                     0.0
                 }
             };
-            let mut best = (along(0, 0), 0.0);
+            let mut best = (along(0, 0), (0, 0));
             for dy in -REACH..=REACH {
                 for dx in -REACH..=REACH {
                     let e = along(dx, dy);
                     if e > best.0 {
-                        best = (e, ((dx * dx + dy * dy) as f64).sqrt());
+                        best = (e, (dx, dy));
                     }
                 }
             }
@@ -637,4 +647,84 @@ fn segment_writes_a_scene_with_masks_that_fits() {
     // Measured: verdict ok, ADD 7.8 % of the diameter (the annotation's offset; module doc).
     assert_eq!(r["verdict"], "ok", "{r}");
     assert!(r["errors"]["add_rel"].as_f64().unwrap() < 0.15, "{}", r["errors"]);
+}
+
+/// How far the annotation itself is from these photographs, in the issue's own measure:
+/// each view's annotated visible mask moved onto the photograph's strongest edges (the
+/// move within ±8 px that [`edges`] finds for the annotated pose's outline; a move to the
+/// window's edge is taken for none found, and the mask stays), then fitted as given
+/// masks are. What a segmenter that followed the photographs exactly would give, were
+/// the cameras right: the fitted pose's ADD(-S) from the annotated one is the part of
+/// the issue's "median ADD(-S) ≤ 2 % d" that the annotation spends.
+#[test]
+fn the_annotation_moved_onto_the_photographs_edges() {
+    let mut adds = Vec::new();
+    for &(o, ims, sym) in SETS.iter() {
+        let scene = import_lmo(o, &ims, None, true);
+        let truth = scene.ground_truth_pose.unwrap();
+        let cameras: Vec<Camera> = scene.views.iter().map(|v| *v.camera()).collect();
+        let grads: Vec<Vec<f64>> = scene.views.iter().map(|v| gradient(v.image().unwrap())).collect();
+        let moves: Vec<(i64, i64)> = edge_moves(&scene.mesh, &truth, &cameras, &grads)
+            .into_iter()
+            .map(|(_, (dx, dy))| {
+                if dx.abs() == 8 || dy.abs() == 8 {
+                    (0, 0)
+                } else {
+                    (dx, dy)
+                }
+            })
+            .collect();
+        let views: Vec<View> = scene
+            .views
+            .iter()
+            .zip(&moves)
+            .map(|(v, &(dx, dy))| {
+                let m = v.mask();
+                let (w, h) = (m.width as i64, m.height as i64);
+                let mut moved = Mask::empty(m.width, m.height);
+                for y in 0..h {
+                    for x in 0..w {
+                        let (sx, sy) = (x - dx, y - dy);
+                        if sx >= 0 && sy >= 0 && sx < w && sy < h && m.get(sx as u32, sy as u32) {
+                            moved.data[(y * w + x) as usize] = 1;
+                        }
+                    }
+                }
+                let sources = ViewSources::files("(moved)", "ignore", "photograph");
+                View::new(
+                    v.name(),
+                    *v.camera(),
+                    moved,
+                    v.ignore().cloned(),
+                    v.image().cloned(),
+                    &sources,
+                )
+                .unwrap()
+            })
+            .collect();
+        let mut est = Estimator::new(scene.mesh.clone(), views, None, FitSettings::default()).unwrap();
+        est.run(usize::MAX).unwrap();
+        let e = metrics::pose_errors(&scene.mesh, &est.pose(), &truth);
+        let add = if sym { e.add_s_rel } else { e.add_rel };
+        println!(
+            "LM-O object {o} {ims:?}: the annotated masks moved by {moves:?} px onto the photographs' edges and \
+             fitted: ADD{} {:.2} % d from the annotated pose, rotation {:.1}°",
+            if sym { "-S" } else { "" },
+            100.0 * add,
+            e.rotation_deg
+        );
+        adds.push(add);
+    }
+    let median = metrics::median(&adds);
+    println!(
+        "the annotated masks moved onto the photographs' edges: median ADD(-S) {:.2} % d from the annotated pose",
+        100.0 * median
+    );
+    // Measured: 1.35–7.40 % d, median 2.24 % d (with the moves to the window's edge
+    // taken as found: median 3.61 %, two fits turned away).
+    assert!(
+        (0.015..0.04).contains(&median),
+        "median ADD(-S) {:.2} % d",
+        100.0 * median
+    );
 }
