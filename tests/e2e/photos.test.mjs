@@ -66,6 +66,16 @@ async function downloadResult(page, name) {
 
 const done = () => document.querySelector('[data-testid=status]').textContent.startsWith('done');
 
+/** Start, wait for the rounds to end, download the result as `name`: the result and the
+ * seconds from Start. */
+async function startToResult(page, name) {
+  const t0 = Date.now();
+  await byId(page, 'start').click();
+  await waitFor(page, done, null, FIT_MS);
+  const wall = (Date.now() - t0) / 1000;
+  return { wall, result: await downloadResult(page, name) };
+}
+
 test('photographs: boxes on two views, the third proposed then dragged; Start segments and fits it right (verdict ok, or ambiguous with its rival named); the masks are in the result; a click corrects a view', async () => {
   const page = await openPage();
   const shown = await loadExample(page);
@@ -151,11 +161,7 @@ test('photographs, Start once the segmenter is ready: the boxed views encoded wh
   const warm = JSON.parse((await byId(page, 'seg-text').getAttribute('data-encodings')) ?? '[]');
   assert.deepEqual(warm.map((e) => e.count), [3], 'one run of the encoder for the three crops');
   const fromLoad = (Date.now() - page.loadedAt) / 1000;
-  const t0 = Date.now();
-  await byId(page, 'start').click();
-  await waitFor(page, done, null, FIT_MS);
-  const wall = (Date.now() - t0) / 1000;
-  const result = await downloadResult(page, 'photos-result-warm.json');
+  const { wall, result } = await startToResult(page, 'photos-result-warm.json');
   const encodings = JSON.parse((await byId(page, 'seg-text').getAttribute('data-encodings')) ?? '[]');
   assert.deepEqual(encodings.map((e) => e.count), [3], 'Start found the crops encoded');
   console.log(`  ready ${fromLoad.toFixed(1)} s after Load ("${said}"); box to pose ${wall.toFixed(1)} s from Start, `
@@ -170,11 +176,7 @@ test('photographs, the example as it comes, Start at once (the segmenter still l
   const page = await openPage();
   const shown = await loadExample(page);
   assert.deepEqual(shown.map((s) => s.kind), ['given', 'given', 'proposed']);
-  const t0 = Date.now();
-  await byId(page, 'start').click();
-  await waitFor(page, done, null, FIT_MS);
-  const wall = (Date.now() - t0) / 1000;
-  const result = await downloadResult(page, 'photos-result-at-once.json');
+  const { wall, result } = await startToResult(page, 'photos-result-at-once.json');
   assert.deepEqual(result.masks.map((m) => m.first_box_from), ['box', 'box', 'geometry']);
   const encodings = JSON.parse((await byId(page, 'seg-text').getAttribute('data-encodings')) ?? '[]');
   // The three crops (the third from the geometry's box) in one run of the encoder.
@@ -221,11 +223,7 @@ test('photographs from a phone: the example enlarged to 4032×3024 (12 MP; its c
   await byId(page, 'file-input').setInputFiles(files);
   await waitFor(page, () => document.querySelectorAll('.view[data-shown]').length === 3, null, FIT_MS);
   const loaded = (Date.now() - t0) / 1000;
-  const t1 = Date.now();
-  await byId(page, 'start').click();
-  await waitFor(page, done, null, FIT_MS);
-  const wall = (Date.now() - t1) / 1000;
-  const result = await downloadResult(page, 'photos-result-12mp.json');
+  const { wall, result } = await startToResult(page, 'photos-result-12mp.json');
   assert.deepEqual(result.masks.map((m) => m.first_box_from), ['box', 'box', 'geometry']);
   for (const m of result.masks) assert.ok(m.iou_with_fit > 0.8, `view ${m.view}: mask against the fit ${m.iou_with_fit}`);
   console.log(`  12-MP photographs: loaded in ${loaded.toFixed(1)} s, box to pose ${wall.toFixed(1)} s from Start, verdict `
