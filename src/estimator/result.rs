@@ -185,7 +185,8 @@ pub struct MaskReport {
     pub iou_with_fit: f64,
     /// What the returned mask is: `"fit"`, the final pose's silhouette where the
     /// segmenter saw the object (`segment::photo::visible`), or `"segmenter"`, the
-    /// segmenter's own final mask (when the two disagree: `iou_with_fit` below 0.5).
+    /// segmenter's own latest mask (while the rounds run, and after them when the two
+    /// disagree — `iou_with_fit` below 0.5 — or nothing of the silhouette is kept).
     #[serde(default)]
     pub returned: String,
 }
