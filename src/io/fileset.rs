@@ -9,8 +9,9 @@
 //! - else one camera JSON per view (a camera, or a scene view entry with `camera` and
 //!   optionally `name`, `mask`, `image`): `NAME.json` is the view `NAME`, its mask
 //!   `masks/NAME.png`, `NAME_mask.png`, `mask_NAME.png` or a lone `NAME.png`, its image
-//!   `images/NAME.png`, `rgb/NAME.png` or `NAME_image.png`; two files both called
-//!   `NAME.png` are told apart by their pixels (a mask is only black and white);
+//!   `images/NAME.png`, `rgb/NAME.png` or `NAME_image.png` (or `.jpg`, `.jpeg`: a
+//!   JPEG is always a photograph, and a lone `NAME.jpg` is the view's); two files both
+//!   called `NAME.png` are told apart by their pixels (a mask is only black and white);
 //! - a mesh alone (`.glb`, `.gltf` with its `.bin`, `.obj`, `.ply`) is checked and
 //!   reported as lacking a scene.
 //!
@@ -75,6 +76,9 @@ fn normalise(path: &str) -> String {
 fn base_name(path: &str) -> &str {
     path.rsplit(['/', '\\']).next().unwrap_or(path)
 }
+
+/// The extensions of the masks' and photographs' files (a mask is a PNG).
+const PICTURE_EXTENSIONS: [&str; 3] = ["png", "jpg", "jpeg"];
 
 fn extension(path: &str) -> String {
     base_name(path)
@@ -146,15 +150,16 @@ struct JsonFile<'a> {
 #[derive(Default)]
 struct Classified<'a> {
     meshes: Vec<&'a str>,
-    pngs: Vec<&'a str>,
+    /// PNG and JPEG files.
+    pictures: Vec<&'a str>,
     scenes: Vec<JsonFile<'a>>,
     cameras: Vec<JsonFile<'a>>,
 }
 
-/// The mask and image of the view `name` among `pngs`, by the naming habits of the
+/// The mask and image of the view `name` among `pictures`, by the naming habits of the
 /// module doc. A mask and an image both written `NAME.png` mean "the two files of that
 /// name": [`FileSet::load_scene`] tells them apart by content.
-fn match_view(name: &str, pngs: &[&str]) -> (Option<String>, Option<String>) {
+fn match_view(name: &str, pictures: &[&str]) -> (Option<String>, Option<String>) {
     let n = name.to_lowercase();
     let parts = |p: &str| {
         let l = p.to_lowercase();
@@ -171,16 +176,33 @@ fn match_view(name: &str, pngs: &[&str]) -> (Option<String>, Option<String>) {
     };
     let is_image = |p: &str| {
         let (dir, base) = parts(p);
-        (matches!(dir.as_str(), "image" | "images" | "rgb") && base == format!("{n}.png"))
-            || ['.', '_', '-'].iter().any(|c| {
-                ["image", "rgb", "color", "colour"]
-                    .iter()
-                    .any(|w| base == format!("{n}{c}{w}.png"))
-            })
+        PICTURE_EXTENSIONS.iter().any(|ext| {
+            (matches!(dir.as_str(), "image" | "images" | "rgb") && base == format!("{n}.{ext}"))
+                || ['.', '_', '-'].iter().any(|c| {
+                    ["image", "rgb", "color", "colour"]
+                        .iter()
+                        .any(|w| base == format!("{n}{c}{w}.{ext}"))
+                })
+        })
     };
-    let mask = pngs.iter().find(|p| is_mask(p)).map(|p| p.to_string());
-    let image = pngs.iter().find(|p| is_image(p)).map(|p| p.to_string());
-    let plain: Vec<&str> = pngs
+    let mask = pictures.iter().find(|p| is_mask(p)).map(|p| p.to_string());
+    // A lone `NAME.jpg` (a JPEG is never a mask here) is the photograph.
+    let lone_jpeg = || {
+        pictures
+            .iter()
+            .find(|p| {
+                ["jpg", "jpeg"]
+                    .iter()
+                    .any(|ext| base_name(p).to_lowercase() == format!("{n}.{ext}"))
+            })
+            .map(|p| p.to_string())
+    };
+    let image = pictures
+        .iter()
+        .find(|p| is_image(p))
+        .map(|p| p.to_string())
+        .or_else(lone_jpeg);
+    let plain: Vec<&str> = pictures
         .iter()
         .copied()
         .filter(|p| base_name(p).to_lowercase() == format!("{n}.png"))
@@ -315,15 +337,15 @@ impl FileSet {
         Ok(None)
     }
 
-    /// Sorts the files: meshes, PNGs, scene files, camera files (others ignored).
+    /// Sorts the files: meshes, pictures (PNG, JPEG), scene files, camera files (others ignored).
     fn classify(&self) -> Result<Classified<'_>> {
         let mut out = Classified::default();
         for (path, bytes) in &self.files {
             let ext = extension(path);
             if is_mesh_file(path) {
                 out.meshes.push(path);
-            } else if ext == "png" {
-                out.pngs.push(path);
+            } else if PICTURE_EXTENSIONS.contains(&ext.as_str()) {
+                out.pictures.push(path);
             } else if ext == "json" {
                 let bad = |problem: String| Error::Json {
                     file: path.clone(),
@@ -355,7 +377,7 @@ impl FileSet {
         }
         let Classified {
             meshes,
-            pngs,
+            pictures,
             mut scenes,
             cameras,
         } = self.classify()?;
@@ -400,7 +422,7 @@ impl FileSet {
                     .get("name")
                     .and_then(Value::as_str)
                     .map_or_else(|| stem(path).to_string(), str::to_string);
-                let (mut found_mask, mut found_image) = match_view(&name, &pngs);
+                let (mut found_mask, mut found_image) = match_view(&name, &pictures);
                 // A lone `NAME.png` that is not black and white is the view's photograph.
                 if let (Some(m), None) = (&found_mask, &found_image) {
                     let photo = self
@@ -832,6 +854,68 @@ mod tests {
         assert!(warnings.is_empty());
         assert_eq!(scene.views[2].name(), "view2");
         assert!(scene.views[0].image().is_some() && scene.views[2].image().is_none());
+    }
+
+    #[test]
+    fn jpeg_photographs_are_found_by_name_and_decoded() {
+        use image::ImageEncoder;
+        let p = parts();
+        let jpeg = |png: &[u8]| {
+            let rgb = image::load_from_memory(png).unwrap().to_rgb8();
+            let mut out = Vec::new();
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 95)
+                .write_image(rgb.as_raw(), rgb.width(), rgb.height(), image::ExtendedColorType::Rgb8)
+                .unwrap();
+            out
+        };
+        let mut set = FileSet::new();
+        set.add("blob.glb", p.glb.clone());
+        // view0: images/NAME.jpg; view1: a lone NAME.JPEG beside a lone NAME.png (the
+        // mask); view2: NAME_rgb.jpg.
+        let names = ["images/view0.jpg", "view1.JPEG", "view2_rgb.jpg"];
+        let masks = ["masks/view0.png", "view1.png", "view2_mask.png"];
+        for (i, (camera, mask, image)) in p.views.iter().enumerate() {
+            set.add(&format!("view{i}.json"), camera.clone().into_bytes());
+            set.add(masks[i], mask.clone());
+            set.add(names[i], jpeg(image));
+        }
+        let Plan::Scene { text, .. } = set.plan().unwrap() else {
+            panic!("a scene")
+        };
+        let v: Value = serde_json::from_str(&text).unwrap();
+        for i in 0..3 {
+            assert_eq!(v["views"][i]["image"], names[i], "{text}");
+            assert_eq!(v["views"][i]["mask"], masks[i], "{text}");
+        }
+        let (scene, warnings, _) = set.load().unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let pngs = folder(&p, "s").load().unwrap().0;
+        for (a, b) in scene.views.iter().zip(&pngs.views) {
+            let (a, b) = (a.image().unwrap(), b.image().unwrap());
+            assert_eq!((a.width, a.height), (b.width, b.height));
+            let diff: f64 = a
+                .data
+                .iter()
+                .zip(&b.data)
+                .map(|(x, y)| (*x as f64 - *y as f64).abs())
+                .sum::<f64>()
+                / a.data.len() as f64;
+            assert!(
+                diff < 4.0,
+                "the JPEG's pixels are the photograph's: mean difference {diff}"
+            );
+        }
+        // A JPEG alone is a photograph, never a mask: a view with nothing else is named.
+        let mut alone = FileSet::new();
+        alone.add("blob.glb", p.glb.clone());
+        alone.add("view0.json", p.views[0].0.clone().into_bytes());
+        alone.add("view0.jpg", jpeg(&p.views[0].2));
+        let Plan::Scene { text, .. } = alone.plan().unwrap() else {
+            panic!("a scene")
+        };
+        let v: Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v["views"][0]["image"], "view0.jpg");
+        assert!(v["views"][0].get("mask").is_none(), "{text}");
     }
 
     #[test]

@@ -1,11 +1,12 @@
-//! PNG masks and images: any bit depth and channel count, decoded with `image`.
+//! PNG masks and PNG or JPEG images: any bit depth and channel count, decoded with
+//! `image`, turned by their EXIF orientation (as a browser or a phone shows them).
 //! Mask rule (SPEC §2): if the PNG has an alpha channel that is not fully opaque
 //! everywhere, a pixel is object where alpha ≥ 128 (of 255); otherwise where luma ≥ 128.
 
 use crate::error::{Error, Result};
 use crate::mask::Mask;
 use crate::view::Rgba;
-use image::{DynamicImage, ImageReader, Limits};
+use image::{metadata::Orientation, DynamicImage, ImageDecoder, ImageReader, Limits};
 use std::io::Cursor;
 
 /// Largest decoded buffer accepted for one mask or image (bytes): 16384² pixels of
@@ -19,20 +20,44 @@ fn reader(bytes: &[u8]) -> std::result::Result<ImageReader<Cursor<&[u8]>>, Strin
         .map_err(|e| format!("cannot read image: {e}"))
 }
 
-/// The width and height a PNG (or other supported image) declares in its header,
-/// read without decoding the pixels.
-pub fn dimensions(bytes: &[u8]) -> std::result::Result<(u32, u32), String> {
-    reader(bytes)?
-        .into_dimensions()
-        .map_err(|e| format!("cannot decode image: {e}"))
+/// Whether an orientation turns the picture a quarter (its width and height swap).
+fn swaps(o: Orientation) -> bool {
+    matches!(
+        o,
+        Orientation::Rotate90 | Orientation::Rotate270 | Orientation::Rotate90FlipH | Orientation::Rotate270FlipH
+    )
 }
 
-/// Decodes with limits: `expected` (when given) must be the declared size, checked
-/// from the header before any pixel is decoded, so a small file declaring a huge
-/// canvas is refused cheaply.
+/// A file's header: its size as stored and its EXIF orientation (none when it has no
+/// such tag or an unreadable one), read without decoding the pixels.
+fn header(bytes: &[u8]) -> std::result::Result<((u32, u32), Orientation), String> {
+    let mut d = reader(bytes)?
+        .into_decoder()
+        .map_err(|e| format!("cannot decode image: {e}"))?;
+    let o = d.orientation().unwrap_or(Orientation::NoTransforms);
+    Ok((d.dimensions(), o))
+}
+
+/// The width and height of a PNG or JPEG as it is shown — its EXIF orientation applied,
+/// as a browser, a phone's gallery and OpenCV's `imread` show it — read from its header
+/// without decoding the pixels.
+pub fn dimensions(bytes: &[u8]) -> std::result::Result<(u32, u32), String> {
+    let ((w, h), o) = header(bytes)?;
+    Ok(if swaps(o) { (h, w) } else { (w, h) })
+}
+
+/// Decodes with limits, turning the picture by its EXIF orientation: `expected` (when
+/// given) must be the size as shown, checked from the header before any pixel is
+/// decoded, so a small file declaring a huge canvas is refused cheaply.
 fn decode(bytes: &[u8], expected: Option<(u32, u32)>) -> std::result::Result<DynamicImage, Refusal> {
-    let got = dimensions(bytes).map_err(Refusal::Decode)?;
+    let (stored, orientation) = header(bytes).map_err(Refusal::Decode)?;
+    let got = if swaps(orientation) {
+        (stored.1, stored.0)
+    } else {
+        stored
+    };
     match expected {
+        Some(want) if got != want && stored == want => return Err(Refusal::Turned { shown: got }),
         Some(want) if got != want => return Err(Refusal::Size(got)),
         // Without a camera's size (the importers), a canvas is held to the default
         // `view_pixels` limit, from the header (a 72-byte PNG may declare a gigabyte).
@@ -49,21 +74,42 @@ fn decode(bytes: &[u8], expected: Option<(u32, u32)>) -> std::result::Result<Dyn
     let mut r = reader(bytes).map_err(Refusal::Decode)?;
     let mut limits = Limits::default();
     limits.max_alloc = Some(MAX_ALLOC);
-    if let Some((w, h)) = expected {
-        limits.max_image_width = Some(w);
-        limits.max_image_height = Some(h);
-    } else {
-        limits.max_image_width = Some(crate::camera::MAX_SIDE);
-        limits.max_image_height = Some(crate::camera::MAX_SIDE);
-    }
+    // The decoder sees the stored size, the caller's is the shown one.
+    let side = expected.map_or(crate::camera::MAX_SIDE, |(w, h)| w.max(h));
+    limits.max_image_width = Some(side);
+    limits.max_image_height = Some(side);
     r.limits(limits);
-    r.decode()
-        .map_err(|e| Refusal::Decode(format!("cannot decode image: {e}")))
+    let failed = |e: image::ImageError| Refusal::Decode(format!("cannot decode image: {e}"));
+    let decoder = r.into_decoder().map_err(failed)?;
+    if decoder.total_bytes() > MAX_ALLOC {
+        return Err(Refusal::Decode(format!(
+            "its pixels would take {} bytes, more than the {MAX_ALLOC} allowed",
+            decoder.total_bytes()
+        )));
+    }
+    let mut img = DynamicImage::from_decoder(decoder).map_err(failed)?;
+    img.apply_orientation(orientation);
+    Ok(img)
 }
 
 enum Refusal {
     Decode(String),
     Size((u32, u32)),
+    /// The stored size is the camera's, but the EXIF orientation turns the picture.
+    Turned {
+        shown: (u32, u32),
+    },
+}
+
+/// What to say of a picture that its EXIF orientation turns off its camera's size.
+fn turned(shown: (u32, u32), expected: Option<(u32, u32)>) -> String {
+    let (w, h) = expected.unwrap_or_default();
+    format!(
+        "is {}×{} as its EXIF orientation turns it (as browsers and OpenCV show it), {w}×{h} as stored, \
+         but the camera is {w}×{h}: give the camera of the picture as shown (its width and height swapped, \
+         its intrinsics turned with it), or save the picture without its orientation tag",
+        shown.0, shown.1
+    )
 }
 
 /// Decodes a mask PNG and binarises it by the SPEC rule. `view` and `file` name it
@@ -84,6 +130,11 @@ fn decode_mask_as(bytes: &[u8], view: &str, file: &str, expected: Option<(u32, u
             view: view.into(),
             file: file.into(),
             problem,
+        },
+        Refusal::Turned { shown } => Error::Mask {
+            view: view.into(),
+            file: file.into(),
+            problem: turned(shown, expected),
         },
         Refusal::Size(size) => Error::MaskSize {
             view: view.into(),
@@ -152,6 +203,11 @@ fn decode_image_as(bytes: &[u8], view: &str, file: &str, expected: Option<(u32, 
             view: view.into(),
             file: file.into(),
             problem,
+        },
+        Refusal::Turned { shown } => Error::Image {
+            view: view.into(),
+            file: file.into(),
+            problem: turned(shown, expected),
         },
         Refusal::Size(size) => Error::ImageSize {
             view: view.into(),
@@ -293,6 +349,91 @@ mod tests {
         // The right size decodes.
         let ok = encode_gray(3, 2, &[0, 255, 0, 255, 0, 0]);
         assert_eq!(decode_mask_sized(&ok, "v", "m.png", 3, 2).unwrap().area(), 2);
+    }
+
+    /// An EXIF block (little-endian TIFF) holding only an orientation tag.
+    fn exif_orientation(value: u8) -> Vec<u8> {
+        let mut t = b"II*\0".to_vec();
+        t.extend_from_slice(&8u32.to_le_bytes());
+        t.extend_from_slice(&1u16.to_le_bytes());
+        // Tag 0x0112 (Orientation), type SHORT, one value, padded to four bytes.
+        t.extend_from_slice(&[0x12, 0x01, 3, 0, 1, 0, 0, 0, value, 0, 0, 0]);
+        t.extend_from_slice(&0u32.to_le_bytes());
+        t
+    }
+
+    /// A 32×16 picture, its left half red and its right half blue, as a JPEG (quality
+    /// 95) with the EXIF orientation `value`, or none.
+    fn jpeg(value: Option<u8>) -> Vec<u8> {
+        use image::ImageEncoder;
+        let px: Vec<u8> = (0..16)
+            .flat_map(|_| (0..32).flat_map(|x| if x < 16 { [230, 20, 20] } else { [20, 20, 230] }))
+            .collect();
+        let mut out = Vec::new();
+        let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 95);
+        if let Some(v) = value {
+            enc.set_exif_metadata(exif_orientation(v)).unwrap();
+        }
+        enc.write_image(&px, 32, 16, image::ExtendedColorType::Rgb8).unwrap();
+        out
+    }
+
+    /// Whether the pixel (x, y) is mostly red (or else mostly blue).
+    fn red_at(img: &Rgba, x: u32, y: u32) -> bool {
+        let i = 4 * (y * img.width + x) as usize;
+        let p = &img.data[i..i + 3];
+        assert!((p[0] > 180 && p[2] < 70) || (p[2] > 180 && p[0] < 70), "{p:?}");
+        p[0] > p[2]
+    }
+
+    #[test]
+    fn jpeg_photographs_decode_turned_by_their_exif_orientation() {
+        // No orientation tag, or "1": as stored.
+        for bytes in [jpeg(None), jpeg(Some(1))] {
+            assert_eq!(dimensions(&bytes).unwrap(), (32, 16));
+            let img = decode_image_sized(&bytes, "v", "a.jpg", 32, 16).unwrap();
+            assert!(red_at(&img, 4, 8) && !red_at(&img, 28, 8));
+        }
+        // 6: turned a quarter clockwise, as a phone held upright writes it: the left
+        // (red) half is now on top.
+        let turned = jpeg(Some(6));
+        assert_eq!(dimensions(&turned).unwrap(), (16, 32));
+        let img = decode_image_sized(&turned, "v", "a.jpg", 16, 32).unwrap();
+        assert_eq!((img.width, img.height), (16, 32));
+        assert!(red_at(&img, 8, 4) && !red_at(&img, 8, 28));
+        // 8: a quarter anticlockwise: the left half at the bottom.
+        let img = decode_image(&jpeg(Some(8)), "v", "a.jpg").unwrap();
+        assert!(!red_at(&img, 8, 4) && red_at(&img, 8, 28));
+        // 3: half a turn: the left half on the right.
+        let img = decode_image(&jpeg(Some(3)), "v", "a.jpg").unwrap();
+        assert!(!red_at(&img, 4, 8) && red_at(&img, 28, 8));
+        // A camera of the stored size: the orientation is named, not just the sizes.
+        let e = decode_image_sized(&turned, "left", "a.jpg", 32, 16)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("view 'left': image 'a.jpg': is 16×32 as its EXIF orientation turns it")
+                && e.contains("32×16 as stored"),
+            "{e}"
+        );
+        let e = decode_mask_sized(&turned, "left", "m.jpg", 32, 16)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("mask 'm.jpg'") && e.contains("EXIF orientation"), "{e}");
+        // Any other size is the plain mismatch.
+        let e = decode_image_sized(&turned, "left", "a.jpg", 30, 20).unwrap_err();
+        assert!(matches!(e, Error::ImageSize { size: (16, 32), .. }), "{e}");
+        // A PNG's eXIf orientation is honoured the same way.
+        use image::ImageEncoder;
+        let px: Vec<u8> = [[255u8; 3], [255; 3], [0; 3], [0; 3]].concat();
+        let mut png = Vec::new();
+        let mut enc = image::codecs::png::PngEncoder::new(&mut png);
+        enc.set_exif_metadata(exif_orientation(6)).unwrap();
+        enc.write_image(&px, 2, 2, image::ExtendedColorType::Rgb8).unwrap();
+        // Stored: top row white, bottom black; turned clockwise: the right column white.
+        let img = decode_image(&png, "v", "m.png").unwrap();
+        assert_eq!(img.data[0..8], [0, 0, 0, 255, 255, 255, 255, 255]);
+        assert_eq!(decode_mask(&png, "v", "m.png").unwrap().data, vec![0, 1, 0, 1]);
     }
 
     #[test]

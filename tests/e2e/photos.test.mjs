@@ -4,7 +4,7 @@
 // segmenter's module and weights loaded in the page's Workers (www/pkg-segment/ and
 // www/models/ from scripts/build-segmenter.sh), rounds of
 // segmenting and fitting to a right pose (verdict ok, or ambiguous naming its rival), a
-// click that corrects a view; the same photographs enlarged to a phone's 12 MP; and the
+// click that corrects a view; the same photographs enlarged to a phone's 12 MP (JPEGs stored sideways, EXIF-tagged); and the
 // errors: a missing or altered weights file, a box off its photograph. Needs www/pkg/, the examples (scripts/build-examples.sh, with
 // ../shared beside the repository) and the segmenter (scripts/build-segmenter.sh).
 // Timings are printed, never asserted.
@@ -189,7 +189,7 @@ test('photographs, the example as it comes, Start at once (the segmenter still l
   await page.context().close();
 });
 
-test('photographs from a phone: the example enlarged to 4032×3024 (12 MP; its cameras and boxes with it) and dropped, Start at once: fits right', async () => {
+test('photographs from a phone: the example enlarged to 4032×3024 (12 MP; its cameras and boxes with it), each a JPEG stored sideways with an EXIF orientation as a phone writes it, dropped, Start at once: fits right', async () => {
   const page = await openPage();
   await page.waitForFunction(() => document.querySelector('[data-testid=example-choice]').options.length > 0);
   const k = 4032 / 640;
@@ -200,33 +200,45 @@ test('photographs from a phone: the example enlarged to 4032×3024 (12 MP; its c
         width: 4032, height: 3024, fx: c.fx * k, fy: c.fy * k, cx: (c.cx + 0.5) * k - 0.5, cy: (c.cy + 0.5) * k - 0.5,
       });
       if (v.box) v.box = v.box.map((x) => x * k);
+      v.image = v.image.replace(/\.png$/, '.jpg');
     }
     return s;
   });
-  // Each photograph enlarged by the browser (bilinear), as a PNG.
+  // Each photograph enlarged by the browser (bilinear) and stored as a phone held upright
+  // stores it: the picture a quarter turn anticlockwise, 3024×4032, as a JPEG (the
+  // browser's encoder, quality 0.92) tagged EXIF orientation 6, "turn a quarter clockwise
+  // to show". The cameras are those of the picture as shown.
   for (const f of files.filter((f) => f.mimeType === 'image/png')) {
-    const png = await page.evaluate(async (b64) => {
+    const jpeg = await page.evaluate(async (b64) => {
       const bytes = Uint8Array.from(atob(b64), (ch) => ch.charCodeAt(0));
       const bitmap = await createImageBitmap(new Blob([bytes], { type: 'image/png' }));
-      const canvas = new OffscreenCanvas(4032, 3024);
+      const canvas = new OffscreenCanvas(3024, 4032);
       const ctx = canvas.getContext('2d');
       ctx.imageSmoothingQuality = 'high';
+      ctx.translate(0, 4032);
+      ctx.rotate(-Math.PI / 2);
       ctx.drawImage(bitmap, 0, 0, 4032, 3024);
-      const out = new Uint8Array(await (await canvas.convertToBlob({ type: 'image/png' })).arrayBuffer());
+      const out = new Uint8Array(await (await canvas.convertToBlob({ type: 'image/jpeg', quality: 0.92 })).arrayBuffer());
       let text = '';
       for (let i = 0; i < out.length; i += 0x8000) text += String.fromCharCode(...out.subarray(i, i + 0x8000));
       return btoa(text);
     }, f.buffer.toString('base64'));
-    f.buffer = Buffer.from(png, 'base64');
+    f.buffer = withExifOrientation(Buffer.from(jpeg, 'base64'), 6);
+    f.name = f.name.replace(/\.png$/, '.jpg');
+    f.mimeType = 'image/jpeg';
   }
   const t0 = Date.now();
   await byId(page, 'file-input').setInputFiles(files);
   await waitFor(page, () => document.querySelectorAll('.view[data-shown]').length === 3, null, FIT_MS);
   const loaded = (Date.now() - t0) / 1000;
+  // Shown the right way up: landscape, as the cameras (read sideways, the load would fail).
+  for (const [w, h] of await page.locator('.view canvas').evaluateAll((cs) => cs.map((c) => [c.width, c.height]))) {
+    assert.ok(w > h, `a picture shown ${w}×${h}`);
+  }
   const { wall, result } = await startToResult(page, 'photos-result-12mp.json');
   assert.deepEqual(result.masks.map((m) => m.first_box_from), ['box', 'box', 'geometry']);
   for (const m of result.masks) assert.ok(m.iou_with_fit > 0.8, `view ${m.view}: mask against the fit ${m.iou_with_fit}`);
-  console.log(`  12-MP photographs: loaded in ${loaded.toFixed(1)} s, box to pose ${wall.toFixed(1)} s from Start, verdict `
+  console.log(`  12-MP JPEGs stored sideways: loaded in ${loaded.toFixed(1)} s, box to pose ${wall.toFixed(1)} s from Start, verdict `
     + `${result.verdict}, ADD ${(100 * result.errors.add_rel).toFixed(2)} % d; phases (s): `
     + `${await page.evaluate(() => document.body.dataset.timings)}`);
   assert.ok(['ok', 'ambiguous'].includes(result.verdict), result.verdict);
@@ -234,6 +246,22 @@ test('photographs from a phone: the example enlarged to 4032×3024 (12 MP; its c
   assert.deepEqual(page.problems, []);
   await page.context().close();
 });
+
+// A JPEG with an EXIF block holding only the orientation tag `value` (an APP1 segment
+// after the JFIF one).
+function withExifOrientation(jpeg, value) {
+  assert.ok(jpeg[0] === 0xff && jpeg[1] === 0xd8, 'a JPEG');
+  const at = jpeg[2] === 0xff && jpeg[3] === 0xe0 ? 4 + jpeg.readUInt16BE(4) : 2;
+  const tiff = Buffer.from([
+    0x49, 0x49, 0x2a, 0, 8, 0, 0, 0, // little-endian TIFF, the first directory at 8
+    1, 0, 0x12, 0x01, 3, 0, 1, 0, 0, 0, value, 0, 0, 0, // one entry: Orientation (SHORT) = value
+    0, 0, 0, 0, // no next directory
+  ]);
+  const body = Buffer.concat([Buffer.from('Exif\0\0', 'latin1'), tiff]);
+  const head = Buffer.from([0xff, 0xe1, 0, 0]);
+  head.writeUInt16BE(body.length + 2, 2);
+  return Buffer.concat([jpeg.subarray(0, at), head, body, jpeg.subarray(at)]);
+}
 
 // The example's scene with its files, as dropped files (bare names).
 function exampleFiles(edit = (s) => s) {

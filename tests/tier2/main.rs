@@ -5,6 +5,7 @@
 
 mod ambiguity;
 mod cameras;
+mod jpeg;
 mod occlusion;
 mod photos;
 mod real;

@@ -315,6 +315,66 @@ fn dropped_files_make_a_session_whatever_they_are() {
     assert_eq!(msg, "no files were given");
 }
 
+/// A phone's photograph: the picture stored a quarter anticlockwise as a JPEG (quality
+/// 95) tagged EXIF orientation 6 (turn a quarter clockwise to show it).
+fn sideways_jpeg(png: &[u8]) -> Vec<u8> {
+    use image::ImageEncoder;
+    let shown = image::load_from_memory(png).unwrap().to_rgb8();
+    let stored = image::imageops::rotate270(&shown);
+    let mut exif = b"II*\0".to_vec();
+    exif.extend_from_slice(&8u32.to_le_bytes());
+    exif.extend_from_slice(&1u16.to_le_bytes());
+    exif.extend_from_slice(&[0x12, 0x01, 3, 0, 1, 0, 0, 0, 6, 0, 0, 0, 0, 0, 0, 0]);
+    let mut out = Vec::new();
+    let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 95);
+    enc.set_exif_metadata(exif).unwrap();
+    enc.write_image(
+        stored.as_raw(),
+        stored.width(),
+        stored.height(),
+        image::ExtendedColorType::Rgb8,
+    )
+    .unwrap();
+    out
+}
+
+#[wasm_bindgen_test]
+fn jpeg_photographs_stored_sideways_load_as_shown() {
+    let ex = toy_example();
+    let scene: serde_json::Value = serde_json::from_str(&text(&ex, "example/scene.json")).unwrap();
+    let mut set = FileSet::new();
+    set.add_bytes("toy.glb", bytes(&ex, "example/toy.glb").to_vec());
+    for v in scene["views"].as_array().unwrap() {
+        let name = v["name"].as_str().unwrap();
+        set.add_bytes(&format!("{name}.json"), v["camera"].to_string().into_bytes());
+        set.add_bytes(
+            &format!("masks/{name}.png"),
+            bytes(&ex, &format!("example/masks/{name}.png")).to_vec(),
+        );
+        set.add_bytes(
+            &format!("{name}.jpg"),
+            sideways_jpeg(bytes(&ex, &format!("example/images/{name}.png"))),
+        );
+    }
+    let session = Session::from_files(&set).unwrap();
+    let from_folder = Session::from_files(&file_set(&ex, false)).unwrap();
+    for (a, b) in session.estimator().views().iter().zip(from_folder.estimator().views()) {
+        let (a, b) = (a.image().unwrap(), b.image().unwrap());
+        assert_eq!((a.width, a.height), (b.width, b.height));
+        let diff = a
+            .data
+            .iter()
+            .zip(&b.data)
+            .map(|(x, y)| x.abs_diff(*y) as f64)
+            .sum::<f64>()
+            / a.data.len() as f64;
+        assert!(
+            diff < 4.0,
+            "the JPEG as shown is the photograph: mean difference {diff}"
+        );
+    }
+}
+
 #[wasm_bindgen_test]
 fn limits_are_enforced_in_the_module_before_copying_or_decoding() {
     let ex = toy_example();
