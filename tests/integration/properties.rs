@@ -620,6 +620,77 @@ proptest! {
     }
 }
 
+/// A JPEG of `w`×`h` pixels (`px`, repeated to fill; grey or RGB) at `quality`, tagged
+/// EXIF orientation `orientation` (no EXIF block when 0; 9 and over are not valid tags).
+fn jpeg(w: u32, h: u32, px: &[u8], grey: bool, quality: u8, orientation: u8) -> Vec<u8> {
+    use image::ImageEncoder;
+    let channels = if grey { 1 } else { 3 };
+    let data: Vec<u8> = px.iter().copied().cycle().take((w * h) as usize * channels).collect();
+    let mut out = Vec::new();
+    let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, quality);
+    if orientation > 0 {
+        let mut t = b"II*\0".to_vec();
+        t.extend_from_slice(&8u32.to_le_bytes());
+        t.extend_from_slice(&1u16.to_le_bytes());
+        t.extend_from_slice(&[0x12, 0x01, 3, 0, 1, 0, 0, 0, orientation, 0, 0, 0, 0, 0, 0, 0]);
+        enc.set_exif_metadata(t).unwrap();
+    }
+    let color = if grey {
+        image::ExtendedColorType::L8
+    } else {
+        image::ExtendedColorType::Rgb8
+    };
+    enc.write_image(&data, w, h, color).unwrap();
+    out
+}
+
+/// The size a JPEG of `w`×`h` tagged `orientation` is shown at (5–8 turn it a quarter).
+fn shown(w: u32, h: u32, orientation: u8) -> (u32, u32) {
+    if (5..=8).contains(&orientation) {
+        (h, w)
+    } else {
+        (w, h)
+    }
+}
+
+proptest! {
+    #![proptest_config(config(1024))]
+
+    /// A JPEG photograph, grey or colour, at any quality and EXIF orientation (or a tag
+    /// that is not one), reads at the size it is shown at.
+    #[test]
+    fn jpegs_read_at_the_size_they_are_shown_at(
+        (w, h) in (1u32..=40, 1u32..=40),
+        px in vec(any::<u8>(), 1..64),
+        grey in any::<bool>(),
+        quality in 1u8..=100,
+        orientation in 0u8..=10,
+    ) {
+        let bytes = jpeg(w, h, &px, grey, quality, orientation);
+        let want = shown(w, h, orientation);
+        prop_assert_eq!(localisebot::io::mask::dimensions(&bytes).unwrap(), want);
+        let img = localisebot::io::mask::decode_image_sized(&bytes, "v", "i.jpg", want.0, want.1).unwrap();
+        prop_assert_eq!((img.width, img.height), want);
+        prop_assert_eq!(img.data.len(), 4 * (want.0 * want.1) as usize);
+    }
+
+    /// Any JPEG, damaged (its markers, its EXIF block, its entropy-coded data): a clean
+    /// answer, never a panic.
+    #[test]
+    fn damaged_jpegs_are_refused_cleanly(
+        (w, h) in (1u32..=40, 1u32..=40),
+        px in vec(any::<u8>(), 1..64),
+        grey in any::<bool>(),
+        quality in 1u8..=100,
+        orientation in 0u8..=10,
+        damage in mutations(),
+    ) {
+        let mut bytes = jpeg(w, h, &px, grey, quality, orientation);
+        mutate(&mut bytes, &damage);
+        let _ = drive_png(&bytes, shown(w, h, orientation));
+    }
+}
+
 // ---------------------------------------------------------------------------------
 // Cameras, poses, scenes
 
