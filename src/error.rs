@@ -36,7 +36,7 @@ pub enum Error {
         problem: String,
     },
     /// A mask (or ignore mask) whose size is not its camera's.
-    #[error("view '{view}': mask '{file}': is {}×{} but the camera is {}×{}", size.0, size.1, expected.0, expected.1)]
+    #[error("view '{view}': mask '{file}': is {}×{} but the camera is {}×{}{}", size.0, size.1, expected.0, expected.1, resized_hint(*size, *expected))]
     MaskSize {
         /// The view's name.
         view: String,
@@ -58,7 +58,7 @@ pub enum Error {
         ignored: bool,
     },
     /// An image whose size is not its camera's.
-    #[error("view '{view}': image '{file}': is {}×{} but the camera is {}×{}", size.0, size.1, expected.0, expected.1)]
+    #[error("view '{view}': image '{file}': is {}×{} but the camera is {}×{}{}", size.0, size.1, expected.0, expected.1, resized_hint(*size, *expected))]
     ImageSize {
         /// The view's name.
         view: String,
@@ -124,5 +124,54 @@ pub enum Error {
     },
 }
 
+/// What to add when a photograph or mask is its camera's picture resized (the same aspect, to
+/// within a pixel either way): by how much to scale the intrinsics. Empty otherwise.
+fn resized_hint(size: (u32, u32), camera: (u32, u32)) -> String {
+    let k = size.0 as f64 / camera.0 as f64;
+    let same_aspect = (camera.1 as f64 * k - size.1 as f64).abs() <= 1.0;
+    if size.0 == 0 || camera.0 == 0 || !same_aspect || size == camera {
+        return String::new();
+    }
+    format!(
+        " (the same shape, {k:.4}× the size: if the pictures were resized after calibration, scale \
+         the camera with it — width and height {}×{}, fx and fy times {k:.4}, cx and cy to (c + 0.5)·{k:.4} − 0.5)",
+        size.0, size.1
+    )
+}
+
 /// Result with the crate's [`Error`](enum@Error).
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_resized_photograph_is_told_how_to_scale_its_camera() {
+        let e = |size, expected| {
+            Error::ImageSize {
+                view: "left".into(),
+                file: "a.jpg".into(),
+                size,
+                expected,
+            }
+            .to_string()
+        };
+        let half = e((2016, 1512), (4032, 3024));
+        assert!(
+            half.starts_with(
+                "view 'left': image 'a.jpg': is 2016×1512 but the camera is 4032×3024 (the same shape, 0.5000×"
+            ) && half
+                .contains("width and height 2016×1512, fx and fy times 0.5000, cx and cy to (c + 0.5)·0.5000 − 0.5"),
+            "{half}"
+        );
+        // An odd side rounded by the resizer is still the same shape.
+        assert!(e((1001, 751), (2002, 1501)).contains("0.5000×"));
+        // Another shape: the sizes alone.
+        assert_eq!(
+            e((640, 640), (640, 480)),
+            "view 'left': image 'a.jpg': is 640×640 but the camera is 640×480"
+        );
+        assert!(!e((0, 0), (640, 480)).contains("same shape"));
+    }
+}
