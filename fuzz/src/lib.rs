@@ -10,3 +10,7 @@
 pub mod arb;
 pub mod formats;
 pub mod targets;
+
+/// The JPEG writers of the main crate's tests (`tests/support/jpeg.rs`), for the seeds.
+#[path = "../../tests/support/jpeg.rs"]
+mod jpeg_support;

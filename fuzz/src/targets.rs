@@ -208,21 +208,12 @@ pub fn reference() -> &'static Reference {
 /// A small JPEG (quality 90; pixels from a fixed formula) tagged EXIF orientation `o`
 /// (no EXIF block when 0).
 fn jpeg_seed(w: u32, h: u32, grey: bool, o: u8) -> Vec<u8> {
-    use image::ImageEncoder;
-    let channels = if grey { 1 } else { 3 };
+    let (channels, color) = match grey {
+        true => (1, image::ExtendedColorType::L8),
+        false => (3, image::ExtendedColorType::Rgb8),
+    };
     let data: Vec<u8> = (0..w * h * channels).map(|k| (k * 37 % 251) as u8).collect();
-    let mut out = Vec::new();
-    let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 90);
-    if o > 0 {
-        let mut t = b"II*\0".to_vec();
-        t.extend_from_slice(&8u32.to_le_bytes());
-        t.extend_from_slice(&1u16.to_le_bytes());
-        t.extend_from_slice(&[0x12, 0x01, 3, 0, 1, 0, 0, 0, o, 0, 0, 0, 0, 0, 0, 0]);
-        enc.set_exif_metadata(t).expect("JPEG takes EXIF");
-    }
-    let color = if grey { image::ExtendedColorType::L8 } else { image::ExtendedColorType::Rgb8 };
-    enc.write_image(&data, w, h, color).expect("a valid JPEG");
-    out
+    crate::jpeg_support::jpeg(&data, w, h, color, 90, (o > 0).then_some(o))
 }
 
 /// Raw-mode inputs made from the reference files (for the seed corpora).

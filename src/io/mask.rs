@@ -246,8 +246,14 @@ pub fn mask_from_rgba(img: &Rgba) -> Mask {
     }
 }
 
+/// The JPEG writers the integration tests use, for this module's tests.
+#[cfg(test)]
+#[path = "../../tests/support/jpeg.rs"]
+mod jpeg_support;
+
 #[cfg(test)]
 mod tests {
+    use super::jpeg_support;
     use super::*;
     use crate::io::png::{encode_gray, encode_rgba};
 
@@ -351,31 +357,13 @@ mod tests {
         assert_eq!(decode_mask_sized(&ok, "v", "m.png", 3, 2).unwrap().area(), 2);
     }
 
-    /// An EXIF block (little-endian TIFF) holding only an orientation tag.
-    fn exif_orientation(value: u8) -> Vec<u8> {
-        let mut t = b"II*\0".to_vec();
-        t.extend_from_slice(&8u32.to_le_bytes());
-        t.extend_from_slice(&1u16.to_le_bytes());
-        // Tag 0x0112 (Orientation), type SHORT, one value, padded to four bytes.
-        t.extend_from_slice(&[0x12, 0x01, 3, 0, 1, 0, 0, 0, value, 0, 0, 0]);
-        t.extend_from_slice(&0u32.to_le_bytes());
-        t
-    }
-
     /// A 32×16 picture, its left half red and its right half blue, as a JPEG (quality
     /// 95) with the EXIF orientation `value`, or none.
     fn jpeg(value: Option<u8>) -> Vec<u8> {
-        use image::ImageEncoder;
         let px: Vec<u8> = (0..16)
             .flat_map(|_| (0..32).flat_map(|x| if x < 16 { [230, 20, 20] } else { [20, 20, 230] }))
             .collect();
-        let mut out = Vec::new();
-        let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 95);
-        if let Some(v) = value {
-            enc.set_exif_metadata(exif_orientation(v)).unwrap();
-        }
-        enc.write_image(&px, 32, 16, image::ExtendedColorType::Rgb8).unwrap();
-        out
+        jpeg_support::jpeg(&px, 32, 16, image::ExtendedColorType::Rgb8, 95, value)
     }
 
     /// Whether the pixel (x, y) is mostly red (or else mostly blue).
@@ -428,7 +416,7 @@ mod tests {
         let px: Vec<u8> = [[255u8; 3], [255; 3], [0; 3], [0; 3]].concat();
         let mut png = Vec::new();
         let mut enc = image::codecs::png::PngEncoder::new(&mut png);
-        enc.set_exif_metadata(exif_orientation(6)).unwrap();
+        enc.set_exif_metadata(jpeg_support::exif_orientation(6)).unwrap();
         enc.write_image(&px, 2, 2, image::ExtendedColorType::Rgb8).unwrap();
         // Stored: top row white, bottom black; turned clockwise: the right column white.
         let img = decode_image(&png, "v", "m.png").unwrap();

@@ -620,37 +620,27 @@ proptest! {
     }
 }
 
-/// A JPEG of `w`×`h` pixels (`px`, repeated to fill; grey or RGB) at `quality`, tagged
-/// EXIF orientation `orientation` (no EXIF block when 0; 9 and over are not valid tags).
-fn jpeg(w: u32, h: u32, px: &[u8], grey: bool, quality: u8, orientation: u8) -> Vec<u8> {
-    use image::ImageEncoder;
-    let channels = if grey { 1 } else { 3 };
-    let data: Vec<u8> = px.iter().copied().cycle().take((w * h) as usize * channels).collect();
-    let mut out = Vec::new();
-    let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, quality);
-    if orientation > 0 {
-        let mut t = b"II*\0".to_vec();
-        t.extend_from_slice(&8u32.to_le_bytes());
-        t.extend_from_slice(&1u16.to_le_bytes());
-        t.extend_from_slice(&[0x12, 0x01, 3, 0, 1, 0, 0, 0, orientation, 0, 0, 0, 0, 0, 0, 0]);
-        enc.set_exif_metadata(t).unwrap();
-    }
-    let color = if grey {
-        image::ExtendedColorType::L8
-    } else {
-        image::ExtendedColorType::Rgb8
-    };
-    enc.write_image(&data, w, h, color).unwrap();
-    out
-}
-
-/// The size a JPEG of `w`×`h` tagged `orientation` is shown at (5–8 turn it a quarter).
-fn shown(w: u32, h: u32, orientation: u8) -> (u32, u32) {
-    if (5..=8).contains(&orientation) {
-        (h, w)
-    } else {
-        (w, h)
-    }
+/// A JPEG photograph of 1–40 px sides (pixels repeated from a random palette), grey or
+/// colour, at quality 1–100, with no EXIF block or the orientation tag 1–10 (9 and 10
+/// are not valid tags); with the size it is shown at (5–8 turn it a quarter).
+fn jpeg_case() -> impl Strategy<Value = (Vec<u8>, (u32, u32))> {
+    (
+        (1u32..=40, 1u32..=40),
+        vec(any::<u8>(), 1..64),
+        any::<bool>(),
+        1u8..=100,
+        prop::option::of(1u8..=10),
+    )
+        .prop_map(|((w, h), px, grey, quality, orientation)| {
+            let (channels, color) = match grey {
+                true => (1, image::ExtendedColorType::L8),
+                false => (3, image::ExtendedColorType::Rgb8),
+            };
+            let data: Vec<u8> = px.iter().copied().cycle().take((w * h) as usize * channels).collect();
+            let bytes = crate::support::jpeg::jpeg(&data, w, h, color, quality, orientation);
+            let turned = orientation.is_some_and(|o| (5..=8).contains(&o));
+            (bytes, if turned { (h, w) } else { (w, h) })
+        })
 }
 
 proptest! {
@@ -659,15 +649,7 @@ proptest! {
     /// A JPEG photograph, grey or colour, at any quality and EXIF orientation (or a tag
     /// that is not one), reads at the size it is shown at.
     #[test]
-    fn jpegs_read_at_the_size_they_are_shown_at(
-        (w, h) in (1u32..=40, 1u32..=40),
-        px in vec(any::<u8>(), 1..64),
-        grey in any::<bool>(),
-        quality in 1u8..=100,
-        orientation in 0u8..=10,
-    ) {
-        let bytes = jpeg(w, h, &px, grey, quality, orientation);
-        let want = shown(w, h, orientation);
+    fn jpegs_read_at_the_size_they_are_shown_at((bytes, want) in jpeg_case()) {
         prop_assert_eq!(localisebot::io::mask::dimensions(&bytes).unwrap(), want);
         let img = localisebot::io::mask::decode_image_sized(&bytes, "v", "i.jpg", want.0, want.1).unwrap();
         prop_assert_eq!((img.width, img.height), want);
@@ -677,17 +659,9 @@ proptest! {
     /// Any JPEG, damaged (its markers, its EXIF block, its entropy-coded data): a clean
     /// answer, never a panic.
     #[test]
-    fn damaged_jpegs_are_refused_cleanly(
-        (w, h) in (1u32..=40, 1u32..=40),
-        px in vec(any::<u8>(), 1..64),
-        grey in any::<bool>(),
-        quality in 1u8..=100,
-        orientation in 0u8..=10,
-        damage in mutations(),
-    ) {
-        let mut bytes = jpeg(w, h, &px, grey, quality, orientation);
+    fn damaged_jpegs_are_refused_cleanly((mut bytes, shown) in jpeg_case(), damage in mutations()) {
         mutate(&mut bytes, &damage);
-        let _ = drive_png(&bytes, shown(w, h, orientation));
+        let _ = drive_png(&bytes, shown);
     }
 }
 

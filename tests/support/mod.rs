@@ -1,9 +1,10 @@
 //! Helpers both native test tiers share (`tests/integration`, `tests/tier2`): where the
 //! shared third-party data and the project's fixtures are, and (in [`coverage`]) the
-//! harness of the statistical checks.
+//! harness of the statistical checks, and (in [`jpeg`]) JPEGs as phones write them.
 #![allow(dead_code)]
 
 pub mod coverage;
+pub mod jpeg;
 
 /// The shared third-party data, `../shared` beside the repository (see its
 /// `data/SOURCES.md`); panics, naming the folder, when it is not there.

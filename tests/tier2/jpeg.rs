@@ -5,45 +5,14 @@
 //! quality 90, and fitted from their boxes through the command line, beside the same
 //! scene with the PNGs: the pictures as shown are the same, so the poses must be too.
 
-use crate::data;
-use image::ImageEncoder;
-
-/// An EXIF block (little-endian TIFF) holding only the orientation tag `value`.
-fn exif_orientation(value: u8) -> Vec<u8> {
-    let mut t = b"II*\0".to_vec();
-    t.extend_from_slice(&8u32.to_le_bytes());
-    t.extend_from_slice(&1u16.to_le_bytes());
-    t.extend_from_slice(&[0x12, 0x01, 3, 0, 1, 0, 0, 0, value, 0, 0, 0]);
-    t.extend_from_slice(&0u32.to_le_bytes());
-    t
-}
+use crate::support::jpeg::sideways_jpeg;
 
 #[test]
 fn phone_jpegs_stored_sideways_fit_like_the_pngs() {
     let d = std::env::temp_dir().join(format!("localisebot-jpeg-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
-    let bin = env!("CARGO_BIN_EXE_localisebot");
-    let run = |args: &[&str]| {
-        let o = std::process::Command::new(bin).args(args).output().unwrap();
-        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
-    };
     let pngs = d.join("pngs");
-    run(&[
-        "import",
-        "bop",
-        data("real/lmo").to_str().unwrap(),
-        "--scene",
-        "2",
-        "--object",
-        "1",
-        "--images",
-        "263,310,819",
-        "--masks",
-        "visib",
-        "--boxes",
-        "--out",
-        pngs.to_str().unwrap(),
-    ]);
+    crate::import_lmo_boxes(1, "263,310,819", &pngs);
     // The same scene with each photograph a sideways JPEG beside the PNG.
     let text = std::fs::read_to_string(pngs.join("scene.json")).unwrap();
     let mut scene: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -51,19 +20,7 @@ fn phone_jpegs_stored_sideways_fit_like_the_pngs() {
         assert!(v.get("mask").is_none() && v.get("box").is_some(), "{v}");
         let png = v["image"].as_str().unwrap().to_string();
         let shown = image::open(pngs.join(&png)).unwrap().to_rgb8();
-        // Stored a quarter anticlockwise: EXIF 6 turns it back clockwise to show.
-        let stored = image::imageops::rotate270(&shown);
-        assert_eq!((stored.width(), stored.height()), (shown.height(), shown.width()));
-        let mut bytes = Vec::new();
-        let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 90);
-        enc.set_exif_metadata(exif_orientation(6)).unwrap();
-        enc.write_image(
-            stored.as_raw(),
-            stored.width(),
-            stored.height(),
-            image::ExtendedColorType::Rgb8,
-        )
-        .unwrap();
+        let bytes = sideways_jpeg(&shown, 90);
         let jpg = png.replace(".png", ".jpg");
         std::fs::write(pngs.join(&jpg), bytes).unwrap();
         v["image"] = jpg.into();
@@ -72,7 +29,7 @@ fn phone_jpegs_stored_sideways_fit_like_the_pngs() {
     std::fs::write(&jpegs, scene.to_string()).unwrap();
     let fit = |scene: &std::path::Path, out: &str| {
         let out = d.join(out);
-        run(&["fit", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        crate::localisebot(&["fit", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
         serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(out).unwrap()).unwrap()
     };
     let from_png = fit(&pngs.join("scene.json"), "png.json");

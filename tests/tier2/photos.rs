@@ -568,29 +568,9 @@ fn lmo_from_photographs_and_boxes() {
 fn segment_writes_a_scene_with_masks_that_fits() {
     let d = std::env::temp_dir().join(format!("localisebot-segment-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
-    let bin = env!("CARGO_BIN_EXE_localisebot");
-    let run = |args: &[&str]| {
-        let o = std::process::Command::new(bin).args(args).output().unwrap();
-        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
-        String::from_utf8_lossy(&o.stderr).to_string()
-    };
+    let run = crate::localisebot;
     let (boxes, checked) = (d.join("boxes"), d.join("checked"));
-    run(&[
-        "import",
-        "bop",
-        data("real/lmo").to_str().unwrap(),
-        "--scene",
-        "2",
-        "--object",
-        "9",
-        "--images",
-        "102,362,476",
-        "--masks",
-        "visib",
-        "--boxes",
-        "--out",
-        boxes.to_str().unwrap(),
-    ]);
+    crate::import_lmo_boxes(9, "102,362,476", &boxes);
     let log = run(&[
         "segment",
         boxes.join("scene.json").to_str().unwrap(),

@@ -10,6 +10,8 @@
 //! `tests/wasm_parity.rs` records and checks natively. Real glTF files of `../shared`
 //! are parsed in wasm by `tests/wasm_shared.rs`.
 
+#[path = "../support/jpeg.rs"]
+mod jpeg;
 mod scene_view;
 
 use glam::DMat3;
@@ -129,6 +131,22 @@ fn text(files: &[(String, Vec<u8>)], path: &str) -> String {
 }
 
 /// The message of a `JsError` as JavaScript sees it: it must be an `Error` object.
+/// The example as one camera file per view (`NAME.json`) and its mesh, added to `set`;
+/// the views' names, for the caller to add their pictures.
+fn per_view_cameras(ex: &[(String, Vec<u8>)], set: &mut FileSet) -> Vec<String> {
+    let scene: serde_json::Value = serde_json::from_str(&text(ex, "example/scene.json")).unwrap();
+    set.add_bytes("toy.glb", bytes(ex, "example/toy.glb").to_vec());
+    let views = scene["views"].as_array().unwrap();
+    views
+        .iter()
+        .map(|v| {
+            let name = v["name"].as_str().unwrap().to_string();
+            set.add_bytes(&format!("{name}.json"), v["camera"].to_string().into_bytes());
+            name
+        })
+        .collect()
+}
+
 fn js_message(e: JsError) -> String {
     let v: JsValue = e.into();
     let err = v.dyn_into::<js_sys::Error>().expect("a JavaScript Error object");
@@ -279,12 +297,8 @@ fn dropped_files_make_a_session_whatever_they_are() {
     names.retain(|n| !wanted.iter().any(|w| w == n));
     assert!(names.is_empty(), "not asked for: {names:?}");
     // One camera JSON per view, with a mask and an image both named viewN.png.
-    let scene: serde_json::Value = serde_json::from_str(&text(&ex, "example/scene.json")).unwrap();
     let mut set = FileSet::new();
-    set.add_bytes("toy.glb", bytes(&ex, "example/toy.glb").to_vec());
-    for v in scene["views"].as_array().unwrap() {
-        let name = v["name"].as_str().unwrap();
-        set.add_bytes(&format!("{name}.json"), v["camera"].to_string().into_bytes());
+    for name in per_view_cameras(&ex, &mut set) {
         set.add_bytes(
             &format!("{name}.png"),
             bytes(&ex, &format!("example/images/{name}.png")).to_vec(),
@@ -315,46 +329,18 @@ fn dropped_files_make_a_session_whatever_they_are() {
     assert_eq!(msg, "no files were given");
 }
 
-/// A phone's photograph: the picture stored a quarter anticlockwise as a JPEG (quality
-/// 95) tagged EXIF orientation 6 (turn a quarter clockwise to show it).
-fn sideways_jpeg(png: &[u8]) -> Vec<u8> {
-    use image::ImageEncoder;
-    let shown = image::load_from_memory(png).unwrap().to_rgb8();
-    let stored = image::imageops::rotate270(&shown);
-    let mut exif = b"II*\0".to_vec();
-    exif.extend_from_slice(&8u32.to_le_bytes());
-    exif.extend_from_slice(&1u16.to_le_bytes());
-    exif.extend_from_slice(&[0x12, 0x01, 3, 0, 1, 0, 0, 0, 6, 0, 0, 0, 0, 0, 0, 0]);
-    let mut out = Vec::new();
-    let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 95);
-    enc.set_exif_metadata(exif).unwrap();
-    enc.write_image(
-        stored.as_raw(),
-        stored.width(),
-        stored.height(),
-        image::ExtendedColorType::Rgb8,
-    )
-    .unwrap();
-    out
-}
-
 #[wasm_bindgen_test]
 fn jpeg_photographs_stored_sideways_load_as_shown() {
     let ex = toy_example();
-    let scene: serde_json::Value = serde_json::from_str(&text(&ex, "example/scene.json")).unwrap();
     let mut set = FileSet::new();
-    set.add_bytes("toy.glb", bytes(&ex, "example/toy.glb").to_vec());
-    for v in scene["views"].as_array().unwrap() {
-        let name = v["name"].as_str().unwrap();
-        set.add_bytes(&format!("{name}.json"), v["camera"].to_string().into_bytes());
+    for name in per_view_cameras(&ex, &mut set) {
         set.add_bytes(
             &format!("masks/{name}.png"),
             bytes(&ex, &format!("example/masks/{name}.png")).to_vec(),
         );
-        set.add_bytes(
-            &format!("{name}.jpg"),
-            sideways_jpeg(bytes(&ex, &format!("example/images/{name}.png"))),
-        );
+        // A phone's photograph: stored sideways as a JPEG, tagged EXIF orientation 6.
+        let shown = image::load_from_memory(bytes(&ex, &format!("example/images/{name}.png"))).unwrap();
+        set.add_bytes(&format!("{name}.jpg"), jpeg::sideways_jpeg(&shown.to_rgb8(), 95));
     }
     let session = Session::from_files(&set).unwrap();
     let from_folder = Session::from_files(&file_set(&ex, false)).unwrap();
