@@ -16,6 +16,9 @@ const ui = {
 const poolParam = new URLSearchParams(location.search).get('pool');
 const segParam = new URLSearchParams(location.search).get('segmenters');
 const simdParam = new URLSearchParams(location.search).get('simd');
+// `?hash=module`: the segmenter's Workers hash its weights themselves, as where the page
+// is not a secure context (no WebCrypto); by default the coordinator hashes them once.
+const hashParam = new URLSearchParams(location.search).get('hash');
 
 let worker = null;
 let views = []; // [{ name, width, height, canvas, iou }]
@@ -44,6 +47,7 @@ function startWorker() {
   if (poolParam !== null) url.searchParams.set('pool', poolParam);
   if (segParam !== null) url.searchParams.set('segmenters', segParam);
   if (simdParam !== null) url.searchParams.set('simd', simdParam);
+  if (hashParam !== null) url.searchParams.set('hash', hashParam);
   const name = lifelineName('fit');
   worker = new Worker(withLifeline(url, name), { type: 'module' });
   // Its end, however it comes, is seen (lifeline.js).
@@ -476,6 +480,8 @@ function showSegmenting(msg) {
   if (msg.encodings) text.dataset.encodings = JSON.stringify(msg.encodings);
   // The segmenter's build in use: 'relaxed' (relaxed SIMD) or '128'.
   if (msg.simd) text.dataset.simd = msg.simd;
+  // Who hashed the weights: 'webcrypto' (the coordinator) or 'module' (each Worker).
+  if (msg.hashed) text.dataset.hashed = msg.hashed;
   // Where the time of a photograph fit went (the worker's phases), for the tests to print.
   if (msg.timings) document.body.dataset.timings = JSON.stringify(msg.timings);
 }

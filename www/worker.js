@@ -545,6 +545,7 @@ const PICTURE_SIDE = 1024; // longest side of a photograph shown for drawing box
 const MAX_SEGMENTERS = 4;
 const segParam = new URL(self.location.href).searchParams.get('segmenters');
 const simdParam = new URL(self.location.href).searchParams.get('simd'); // '128': the segmenter's simd128 build
+const hashParam = new URL(self.location.href).searchParams.get('hash'); // 'module': each segmenter Worker hashes the weights
 
 function loadedPhotos() {
   const views = photo.views();
@@ -575,7 +576,7 @@ function warm() {
         // Said once no crop is being warmed, and while Start has not taken the line over.
         if (photo !== p || p.started || warming > 0) return;
         post({
-          type: 'segmenting', done: 1, total: 1, finished: true, encodings: pool.encodings, simd: pool.simd,
+          type: 'segmenting', done: 1, total: 1, finished: true, encodings: pool.encodings, simd: pool.simd, hashed: pool.hashed,
           text: `segmenter ready${n > 0 ? `, ${n} view${n > 1 ? 's' : ''} encoded` : ''}: Start segments and fits`,
         });
       };
@@ -605,7 +606,7 @@ function startSegmenters(photos) {
     const cores = navigator.hardwareConcurrency || 1;
     const wanted = segParam === null ? cores : Number.parseInt(segParam, 10) || 1;
     const n = Math.max(1, Math.min(wanted, photos, MAX_SEGMENTERS));
-    const started = Segmenters.start(n, (text) => post({ type: 'segmenting', text, done: 0, total: 0 }), simdParam);
+    const started = Segmenters.start(n, (text) => post({ type: 'segmenting', text, done: 0, total: 0 }), simdParam, hashParam);
     segmenters = started;
     // A pool that failed to start, or broke later (a Worker ended), is started again next time.
     const forget = () => {
@@ -686,6 +687,7 @@ async function segmentOnce(jobs) {
     text: `round ${photo.rounds + 1}: ${jobs.length} view(s) segmented in ${((performance.now() - t0) / 1000).toFixed(1)} s`,
     encodings: pool.encodings,
     simd: pool.simd,
+    hashed: pool.hashed,
   });
   return answers;
 }

@@ -42,6 +42,17 @@ fn js(e: crate::SegmentError) -> JsError {
     JsError::new(&e.to_string())
 }
 
+impl Segmenter {
+    /// A segmenter around the model, no encoding kept yet.
+    fn of(sam: Sam) -> Segmenter {
+        Segmenter {
+            sam,
+            cache: Vec::new(),
+            encoded: 0,
+        }
+    }
+}
+
 #[wasm_bindgen]
 impl Segmenter {
     /// The model from the encoder's and the decoder's ONNX bytes, each checked against
@@ -49,11 +60,30 @@ impl Segmenter {
     #[wasm_bindgen(constructor)]
     pub fn new(encoder: &[u8], decoder: &[u8], encoder_name: &str, decoder_name: &str) -> Result<Segmenter, JsError> {
         let sam = Sam::new(encoder, decoder, [encoder_name, decoder_name]).map_err(js)?;
-        Ok(Segmenter {
-            sam,
-            cache: Vec::new(),
-            encoded: 0,
-        })
+        Ok(Segmenter::of(sam))
+    }
+
+    /// As the constructor, for a caller that hashed the files itself (with the
+    /// browser's `crypto.subtle.digest('SHA-256', …)`, much faster than this module's
+    /// own hashing): `encoderSha256`, `decoderSha256` are their SHA-256 as lower-case
+    /// hex, checked against the pinned ones before the model is built.
+    #[wasm_bindgen(js_name = withDigests)]
+    pub fn with_digests(
+        encoder: &[u8],
+        decoder: &[u8],
+        encoder_name: &str,
+        decoder_name: &str,
+        encoder_sha256: &str,
+        decoder_sha256: &str,
+    ) -> Result<Segmenter, JsError> {
+        let sam = Sam::with_digests(
+            encoder,
+            decoder,
+            [encoder_name, decoder_name],
+            [encoder_sha256, decoder_sha256],
+        )
+        .map_err(js)?;
+        Ok(Segmenter::of(sam))
     }
 
     /// Segments a square crop (`rgb`: `side × side` RGB8, row-major) prompted with a box

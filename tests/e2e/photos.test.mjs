@@ -274,7 +274,7 @@ function exampleFiles(edit = (s) => s) {
   return files;
 }
 
-test('photographs, errors: a box off its photograph is named on load; missing and altered weights are named at Start, and Start works once they are back (the example as it comes, to verdict ok, on the segmenter\'s simd128 build: taken when the relaxed-SIMD module is missing, and when ?simd=128 asks for it)', async () => {
+test('photographs, errors: a box off its photograph is named on load; missing and altered weights are named at Start (the weights hashed by the page with WebCrypto, or by the segmenter\'s Workers), and Start works once they are back (the example as it comes, to verdict ok, on the segmenter\'s simd128 build: taken when the relaxed-SIMD module is missing, and when ?simd=128 asks for it)', async () => {
   const page = await openPage();
   await byId(page, 'file-input').setInputFiles(exampleFiles((s) => {
     s.views[1].box = [700, 10, 720, 30];
@@ -285,14 +285,17 @@ test('photographs, errors: a box off its photograph is named on load; missing an
   assert.match(e1, new RegExp(`view '${scene.views[1].name}'.*box`), e1);
   await page.context().close();
 
-  for (const [what, answer, says, query] of [
-    ['missing', (route) => route.fulfill({ status: 404, body: 'no' }), /encoder\.onnx: HTTP 404.*scripts\/setup\.sh/, ''],
+  // 'missing' with ?hash=module: the segmenter's Workers hash the weights themselves (as
+  // where the page is not a secure context); 'altered': the coordinator hashes them with
+  // WebCrypto, and the Workers check its digests.
+  for (const [what, answer, says, query, hashed] of [
+    ['missing', (route) => route.fulfill({ status: 404, body: 'no' }), /encoder\.onnx: HTTP 404.*scripts\/setup\.sh/, '?hash=module', 'module'],
     ['altered', async (route) => {
       const res = await route.fetch();
       const body = Buffer.from(await res.body());
       body[body.length - 5] ^= 0xff;
       await route.fulfill({ response: res, body });
-    }, /encoder\.onnx: SHA-256 [0-9a-f]{64}, expected .*altered/, '?simd=128'],
+    }, /encoder\.onnx: SHA-256 [0-9a-f]{64}, expected .*altered/, '?simd=128', 'webcrypto'],
   ]) {
     let broken = true;
     const page2 = await openPage(query, async (context) => {
@@ -315,6 +318,7 @@ test('photographs, errors: a box off its photograph is named on load; missing an
     await waitFor(page2, done, null, FIT_MS);
     console.log(`  ${what} weights: "${e.slice(0, 120)}…", then fitted: ${await status(page2)}`);
     assert.equal(await byId(page2, 'seg-text').getAttribute('data-simd'), '128', `${what}: the simd128 build`);
+    assert.equal(await byId(page2, 'seg-text').getAttribute('data-hashed'), hashed, `${what}: the weights hashed by`);
     // The example as it comes (boxes on two views, the third's from the geometry), from
     // photographs alone to verdict ok, and right.
     assert.equal(await byId(page2, 'verdict').getAttribute('data-verdict'), 'ok', await byId(page2, 'verdict').textContent());
