@@ -7,6 +7,7 @@ mod ambiguity;
 mod cameras;
 mod jpeg;
 mod occlusion;
+mod outlines;
 mod photos;
 mod real;
 mod segmenter;

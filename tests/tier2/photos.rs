@@ -6,9 +6,11 @@
 //! and the fit corrects them. Then the same with boxes in only two of the three views
 //! (the third's box comes from the geometry), and with boxes in three views dragged
 //! otherwise (three more seeds of the edges' moves). Prints every fit and the summary
-//! figures; asserts them against what was measured.
+//! figures; asserts them against what was measured. The first set's fits also draw
+//! their outlines on the photographs ([`crate::outlines`]).
 
 use crate::data;
+use crate::outlines;
 use localisebot::io::bop::{self, BopOptions, BoxHints, MaskKind};
 use localisebot::io::mask::decode_mask;
 use localisebot::raster::hard;
@@ -279,6 +281,11 @@ fn fit(sam: &mut SamSegmenter, object: u32, images: &[u32], symmetric: bool, wit
     let mask_ious = ious(&photo.masks(), &annotated);
     let segmenter_ious = ious(&photo.segmenter_masks(), &annotated);
     let made: Vec<Option<&Mask>> = photo.segmenter_masks().into_iter().map(|(_, m)| m).collect();
+    if with_box >= 3 && seed == object as u64 {
+        let fitted: Vec<Mask> = cameras.iter().map(|c| hard::render(&mesh, &pose, c)).collect();
+        let path = outlines::write(object, &pictures, &annotated, &made, &fitted);
+        println!("    the outlines on the photographs: {}", path.display());
+    }
     let fitted_explains = explains(&mesh, &pose, &cameras, &made);
     let truth_explains = explains(&mesh, &truth, &cameras, &made);
     let grads: Vec<Vec<f64>> = pictures.iter().map(|p| gradient(p)).collect();
