@@ -30,12 +30,18 @@ async function fetchBytes(path) {
 
 // The files' SHA-256 as lower-case hex, by the browser's WebCrypto (natively fast: 45 MB
 // in ~0.05 s, where the segmenter's wasm hashes at ~50 MB/s in each Worker), or null
-// where the page is not a secure context (no crypto.subtle): the Workers hash then.
+// where the page is not a secure context (no crypto.subtle) or WebCrypto fails: the
+// Workers hash them then.
 async function digests(buffers) {
   const subtle = globalThis.crypto?.subtle;
   if (!subtle) return null;
   const hex = (b) => Array.from(new Uint8Array(b), (x) => x.toString(16).padStart(2, '0')).join('');
-  return Promise.all(buffers.map(async (b) => hex(await subtle.digest('SHA-256', b))));
+  try {
+    return await Promise.all(buffers.map(async (b) => hex(await subtle.digest('SHA-256', b))));
+  } catch (e) {
+    console.warn(`WebCrypto could not hash the segmenter's weights (${e.message}); its Workers hash them`);
+    return null;
+  }
 }
 
 // A module of one function, () -> v128, that returns f32x4.relaxed_madd of three
