@@ -29,7 +29,7 @@ async function fetchBytes(path) {
 }
 
 // The files' SHA-256 as lower-case hex, by the browser's WebCrypto (natively fast: 45 MB
-// in ~0.05 s, where the segmenter's wasm hashes at ~50 MB/s in each Worker), or null
+// in ~0.05 s, where the segmenter's wasm hashes at 20–50 MB/s in each Worker), or null
 // where the page is not a secure context (no crypto.subtle) or WebCrypto fails: the
 // Workers hash them then.
 async function digests(buffers) {

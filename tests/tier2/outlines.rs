@@ -7,7 +7,7 @@
 //! figures are measured against the annotation; these show where it, the segmenter and
 //! the fit lie on the photographs themselves.
 
-use localisebot::{Mask, Rgba};
+use localisebot::{metrics, Mask, Rgba};
 use std::path::PathBuf;
 
 /// Pixels around the outlines' union.
@@ -19,45 +19,29 @@ const ANNOTATED: [u8; 3] = [0, 255, 0];
 const SEGMENTER: [u8; 3] = [255, 0, 0];
 const FITTED: [u8; 3] = [0, 128, 255];
 
-/// Whether (x, y) is on `m`'s outline: inside, with a 4-neighbour outside or on the border.
-fn on_outline(m: &Mask, x: u32, y: u32) -> bool {
-    m.get(x, y)
-        && (x == 0
-            || y == 0
-            || x + 1 == m.width
-            || y + 1 == m.height
-            || !m.get(x - 1, y)
-            || !m.get(x + 1, y)
-            || !m.get(x, y - 1)
-            || !m.get(x, y + 1))
-}
-
 /// The box (x0, y0, x1, y1), exclusive ends, of the masks' pixels with a margin.
 fn frame(masks: &[&Mask], w: u32, h: u32) -> Option<(u32, u32, u32, u32)> {
-    let (mut x0, mut y0, mut x1, mut y1) = (u32::MAX, u32::MAX, 0, 0);
-    for m in masks {
-        for y in 0..m.height {
-            for x in 0..m.width {
-                if m.get(x, y) {
-                    (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
-                }
-            }
-        }
-    }
-    (x1 > x0).then(|| {
-        (
-            x0.saturating_sub(MARGIN),
-            y0.saturating_sub(MARGIN),
-            (x1 + MARGIN).min(w),
-            (y1 + MARGIN).min(h),
-        )
-    })
+    let (x0, y0, x1, y1) = masks
+        .iter()
+        .filter_map(|m| m.bbox())
+        .reduce(|a, b| (a.0.min(b.0), a.1.min(b.1), a.2.max(b.2), a.3.max(b.3)))?;
+    Some((
+        x0.saturating_sub(MARGIN),
+        y0.saturating_sub(MARGIN),
+        (x1 + 1 + MARGIN).min(w),
+        (y1 + 1 + MARGIN).min(h),
+    ))
 }
 
 /// One view's strip: the photograph's crop as it is, and with the outlines.
 fn strip(photo: &Rgba, annotated: &Mask, segmenter: &Mask, fitted: &Mask) -> Option<image::RgbImage> {
     let (x0, y0, x1, y1) = frame(&[annotated, segmenter, fitted], photo.width, photo.height)?;
     let (w, h) = (x1 - x0, y1 - y0);
+    let outlines = [
+        (metrics::contour(annotated), ANNOTATED),
+        (metrics::contour(segmenter), SEGMENTER),
+        (metrics::contour(fitted), FITTED),
+    ];
     let mut out = image::RgbImage::new(2 * w * ZOOM, h * ZOOM);
     for y in 0..h {
         for x in 0..w {
@@ -65,9 +49,9 @@ fn strip(photo: &Rgba, annotated: &Mask, segmenter: &Mask, fitted: &Mask) -> Opt
             let i = 4 * (sy * photo.width + sx) as usize;
             let plain = [photo.data[i], photo.data[i + 1], photo.data[i + 2]];
             let mut drawn = plain;
-            for (m, colour) in [(annotated, ANNOTATED), (segmenter, SEGMENTER), (fitted, FITTED)] {
-                if on_outline(m, sx, sy) {
-                    drawn = colour;
+            for (outline, colour) in &outlines {
+                if outline.get(sx, sy) {
+                    drawn = *colour;
                 }
             }
             for dy in 0..ZOOM {
@@ -113,8 +97,9 @@ pub fn write(
 mod tests {
     use super::*;
 
-    /// A 2×2 square's outline is all of it; a 3×3's leaves its centre; the strip puts the
-    /// photograph on the left untouched and the outlines' colours on the right.
+    /// The frame is the mask's box with the margin, clipped; the strip puts the
+    /// photograph on the left untouched and the outlines' colours on the right (a 3×3
+    /// square's outline leaves its centre), the fitted one drawn last.
     #[test]
     fn outlines_are_drawn_beside_the_plain_photograph() {
         let mut m = Mask::empty(20, 20);
@@ -123,8 +108,9 @@ mod tests {
                 m.data[(y * 20 + x) as usize] = 1;
             }
         }
-        assert!(on_outline(&m, 8, 8) && on_outline(&m, 10, 9) && !on_outline(&m, 9, 9));
         assert_eq!(frame(&[&m], 20, 20), Some((0, 0, 20, 20)));
+        assert_eq!(frame(&[&m], 40, 40), Some((0, 0, 11 + MARGIN, 11 + MARGIN)));
+        assert_eq!(frame(&[&Mask::empty(20, 20)], 20, 20), None);
         let photo = Rgba {
             width: 20,
             height: 20,
