@@ -4,6 +4,7 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 mod ambiguity;
+mod annotation;
 mod cameras;
 mod jpeg;
 mod occlusion;
