@@ -166,7 +166,8 @@ pub struct AlternativeOut {
 pub struct MaskReport {
     /// The view's name.
     pub view: String,
-    /// Where its first box came from: `"box"` (the scene's) or `"geometry"`.
+    /// Where its first box came from: `"box"` (the scene's) or `"geometry"` (no box, or
+    /// one far too loose: the other views' geometry gave the box within it).
     pub first_box_from: String,
     /// The first box, image pixels `[x_min, y_min, x_max, y_max]`.
     pub first_box: [f64; 4],

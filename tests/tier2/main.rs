@@ -5,6 +5,7 @@
 
 mod ambiguity;
 mod annotation;
+mod boxes;
 mod cameras;
 mod jpeg;
 mod occlusion;

@@ -14,6 +14,11 @@ use serde::Serialize;
 /// A user's point clicked within this many pixels of an earlier one removes it.
 pub const POINT_TOGGLE_PX: f64 = 6.0;
 
+/// A drawn box whose longer side is more than this many times that of the box the
+/// other views' geometry implies is too loose to prompt the segmenter with (a box
+/// around the whole photograph says nothing of where the object is).
+pub const LOOSE_BOX: f64 = 3.0;
+
 /// One scene view's box, for a person drawing them (see [`PhotoFit::boxes`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ViewBox {
@@ -38,6 +43,35 @@ impl PhotoFit {
             .filter_map(|s| match s {
                 Slot::Given(v) => PixelBox::of_mask(v.mask()).map(|b| (v.camera(), b, v.name())),
                 Slot::Made(m) => m.photo.hint.map(|b| (&m.photo.camera, b, m.photo.name.as_str())),
+            })
+            .collect()
+    }
+
+    /// For each view, when its drawn box is too loose ([`LOOSE_BOX`]) against the box
+    /// the geometry of at least two other views with a box or a mask implies: that box
+    /// (within the drawn one), and how many times longer the drawn box's longer side is.
+    pub(super) fn loose_boxes(&self) -> Vec<Option<(PixelBox, f64)>> {
+        let hinted = self.hinted();
+        self.slots
+            .iter()
+            .map(|s| {
+                let Slot::Made(m) = s else { return None };
+                let drawn = m.photo.hint?;
+                let others: Vec<_> = hinted.iter().filter(|h| h.2 != m.photo.name).copied().collect();
+                if others.len() < 2 {
+                    return None;
+                }
+                let (c, r) = sphere_from_boxes(&others).ok()?;
+                let implied = box_of_sphere(&m.photo.name, &m.photo.camera, c, r).ok()?;
+                let ratio = drawn.size().max_element() / implied.size().max_element();
+                let within = PixelBox {
+                    x0: implied.x0.max(drawn.x0),
+                    y0: implied.y0.max(drawn.y0),
+                    x1: implied.x1.min(drawn.x1),
+                    y1: implied.y1.min(drawn.y1),
+                };
+                (ratio > LOOSE_BOX && within.x1 - within.x0 >= 1.0 && within.y1 - within.y0 >= 1.0)
+                    .then_some((within, ratio))
             })
             .collect()
     }
@@ -166,8 +200,9 @@ impl PhotoFit {
     }
 
     /// Before [`PhotoFit::start`], the first round's jobs as they stand — the same
-    /// crops and prompts `start` will ask for: of the views with a box, and, once two
-    /// views have a box or a mask, of the others from the box the geometry proposes —
+    /// crops and prompts `start` will ask for: of the views with a box (the geometry's
+    /// within it when it is too loose, [`LOOSE_BOX`]), and, once two views have a box
+    /// or a mask, of the others from the box the geometry proposes —
     /// so that a segmenter can encode their crops while the user still looks at the
     /// boxes. Empty once started.
     pub fn warm_jobs(&self) -> Vec<SegmentJob> {
@@ -178,12 +213,14 @@ impl PhotoFit {
         self.slots
             .iter()
             .enumerate()
-            .filter_map(|(i, s)| match s {
+            .zip(self.loose_boxes())
+            .filter_map(|((i, s), loose)| match s {
                 Slot::Made(m) => {
-                    let b = match (m.photo.hint, sphere) {
-                        (Some(b), _) => b,
-                        (None, Some((c, r))) => box_of_sphere(&m.photo.name, &m.photo.camera, c, r).ok()?,
-                        (None, None) => return None,
+                    let b = match (m.photo.hint, sphere, loose) {
+                        (Some(_), _, Some((within, _))) => within,
+                        (Some(b), _, None) => b,
+                        (None, Some((c, r)), _) => box_of_sphere(&m.photo.name, &m.photo.camera, c, r).ok()?,
+                        (None, None, _) => return None,
                     };
                     let mut job = SegmentJob::from_box(i, Crop::around(&b, self.photo.crop_margin), &b);
                     add_points(&mut job, &m.points);

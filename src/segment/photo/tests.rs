@@ -56,13 +56,20 @@ impl Segmenter for Fake {
 }
 
 fn scene() -> (Scene, Vec<Mask>) {
+    scene_of(160, 0.7)
+}
+
+/// Three views of the toy plane, `side²` pixels, its bounding sphere spanning `fill`
+/// of the half-side.
+fn scene_of(side: u32, fill: f64) -> (Scene, Vec<Mask>) {
     let mesh = shapes::toy_plane();
     let s = synth::SynthSettings {
         views: 3,
-        width: 160,
-        height: 160,
+        width: side,
+        height: side,
         seed: 4,
         images: true,
+        fill,
         ..Default::default()
     };
     let made = synth::synthesize(&mesh, &s, None).unwrap();
@@ -395,4 +402,125 @@ fn fits_in_doubt_search_afresh_only_as_often_as_asked() {
             "searches {searches}: the refit searched"
         );
     }
+}
+
+/// Answers every job with its prompt's box filled: what SAM does with a box around
+/// a whole photograph (it takes in the table and the wall).
+struct Boxy;
+
+impl Segmenter for Boxy {
+    fn segment(&mut self, jobs: &[SegmentJob], _: &[&Rgba]) -> Result<Vec<SegmentOutput>> {
+        Ok(jobs
+            .iter()
+            .map(|j| {
+                let side = j.crop.side;
+                let mut m = Mask::empty(side, side);
+                let [x0, y0, x1, y1] = j.prompt_box.map(|v| v.round().clamp(0.0, side as f64) as u32);
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        m.data[(y * side + x) as usize] = 1;
+                    }
+                }
+                SegmentOutput::single(m, vec![0.0; 16], 0.9)
+            })
+            .collect())
+    }
+}
+
+#[test]
+fn a_box_around_the_whole_photograph_is_replaced_by_the_geometrys() {
+    // The object small in its photographs, and view 0's box around all of it.
+    let side = 320.0;
+    let (mut scene, truth) = scene_of(side as u32, 0.25);
+    scene.photos[0].hint = Some(PixelBox::new("view0", [0.0, 0.0, side, side], 320, 320).unwrap());
+    let tight: Vec<PixelBox> = truth.iter().map(|m| PixelBox::of_mask(m).unwrap()).collect();
+    let mut fit = PhotoFit::prepare(scene.clone(), FitSettings::default(), PhotoSettings::default()).unwrap();
+    let loose = fit.loose_boxes();
+    let (within, ratio) = loose[0].expect("the whole photograph's box is too loose");
+    assert!(
+        ratio > boxes::LOOSE_BOX && loose[1].is_none() && loose[2].is_none(),
+        "{loose:?}"
+    );
+    // The geometry's box holds the object (loosely), within the drawn one.
+    assert!(
+        within.x0 <= tight[0].x0 && within.y0 <= tight[0].y0 && within.x1 >= tight[0].x1 && within.y1 >= tight[0].y1
+    );
+    assert!(within.size().max_element() < 0.5 * side, "{within:?}");
+    let warm = fit.warm_jobs();
+    fit.start().unwrap();
+    assert_eq!(fit.pending(), &warm[..], "the warmed jobs are the start's");
+    assert!(fit.warnings()[0].contains("view 'view0'") && fit.warnings()[0].contains("the box drawn is"));
+    // With a segmenter that fills its box, the whole photograph's box would have given
+    // a mask of the whole photograph; the geometry's gives one near the object, and the
+    // view sits out the first fit.
+    let est = run(&mut fit, &mut Boxy, |p, e| {
+        if p.rounds() == 1 && !e.is_done() {
+            assert_eq!(e.views().len(), 2, "view 0 sits out the first fit");
+        }
+    })
+    .unwrap();
+    let r = fit.result(&est, 0.0, None);
+    assert_eq!(r.masks[0].first_box_from, "geometry");
+    assert!(
+        (r.masks[0].areas[0] as f64) < 0.1 * side * side,
+        "{:?}",
+        r.masks[0].areas
+    );
+    // Boxes as drawn normally are left alone.
+    let (mut scene, _) = scene_of(side as u32, 0.25);
+    let fit = PhotoFit::prepare(scene.clone(), FitSettings::default(), PhotoSettings::default()).unwrap();
+    assert!(fit.loose_boxes().iter().all(Option::is_none));
+    // Every box around its whole photograph: nothing to correct them by; the masks of
+    // the whole photographs are fitted, each view warned of, and the fit is not `ok`.
+    for p in &mut scene.photos {
+        p.hint = Some(PixelBox::new(&p.name, [0.0, 0.0, side, side], 320, 320).unwrap());
+    }
+    let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
+    assert!(fit.loose_boxes().iter().all(Option::is_none));
+    let est = run(&mut fit, &mut Boxy, |_, _| {}).unwrap();
+    for i in 0..3 {
+        let named = fit
+            .warnings()
+            .iter()
+            .filter(|w| w.starts_with(&format!("view 'view{i}': the segmenter's mask covers")));
+        assert_eq!(named.count(), 1, "{:?}", fit.warnings());
+    }
+    assert_ne!(fit.result(&est, 0.0, None).verdict, Some(Verdict::Ok));
+}
+
+#[test]
+fn a_re_prompt_stays_within_the_drawn_box() {
+    let mut m = Mask::empty(40, 40);
+    m.data.iter_mut().for_each(|v| *v = 1);
+    let b = PixelBox::new("v", [10.0, 10.0, 20.0, 20.0], 40, 40).unwrap();
+    keep_within(&mut m, &b);
+    // 30 % of the side and 2 px each way: columns and rows 5..25.
+    assert_eq!(BOX_SLACK, 0.3);
+    assert_eq!(m.area(), 20 * 20);
+    assert!(m.get(5, 5) && m.get(24, 24) && !m.get(4, 10) && !m.get(25, 10) && !m.get(10, 25));
+    // A fitted pose far off: the re-prompt's box is the drawn one, not the pose's.
+    let (scene, truth) = scene();
+    let mut fit = PhotoFit::new(scene, FitSettings::default(), PhotoSettings::default()).unwrap();
+    let est = run(&mut fit, &mut Fake(truth.clone()), |_, _| {}).unwrap();
+    let mut away = est.pose();
+    let Slot::Made(made) = &mut fit.slots[1] else {
+        panic!("made")
+    };
+    let cam = made.photo.camera;
+    // Move the object sideways in view 1 by its box's longer side.
+    let drawn = made.photo.hint.unwrap();
+    let depth = cam.to_camera(away.translation).z;
+    let shift = (drawn.x1 - drawn.x0).max(drawn.y1 - drawn.y0) * depth / cam.fx;
+    away.translation += cam.rotation.transpose() * glam::DVec3::new(shift, 0.0, 0.0);
+    let job = reprompt(&fit.mesh, &away, 1, made, 0.15);
+    let [x0, y0, x1, y1] = job.prompt_box;
+    let (cx0, cy0) = (job.crop.x0 as f64, job.crop.y0 as f64);
+    let slack = BOX_SLACK * (drawn.x1 - drawn.x0).max(drawn.y1 - drawn.y0) + 2.0;
+    assert!(
+        cx0 + x0 >= drawn.x0 - slack - 2.0 && cx0 + x1 <= drawn.x1 + slack + 2.0,
+        "{:?} in crop {:?}, drawn {drawn:?}",
+        job.prompt_box,
+        job.crop
+    );
+    assert!(cy0 + y0 >= drawn.y0 - slack - 2.0 && cy0 + y1 <= drawn.y1 + slack + 2.0);
 }
