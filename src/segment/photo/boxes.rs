@@ -201,7 +201,7 @@ impl PhotoFit {
 
     /// Before [`PhotoFit::start`], the first round's jobs as they stand — the same
     /// crops and prompts `start` will ask for: of the views with a box (the geometry's
-    /// within it when it is too loose, [`LOOSE_BOX`]), and, once two views have a box
+    /// within it when it is three times too loose), and, once two views have a box
     /// or a mask, of the others from the box the geometry proposes —
     /// so that a segmenter can encode their crops while the user still looks at the
     /// boxes. Empty once started.
