@@ -458,18 +458,13 @@ impl PhotoFit {
                     let p = &m.photo;
                     let cover = mask.area() as f64 / (mask.width as f64 * mask.height as f64);
                     if cover >= WHOLE_MASK {
-                        let w = format!(
-                            "view '{}': the segmenter's mask covers {:.0} % of the photograph, which says little of \
-                             where the object is: draw a box close around the object",
-                            p.name,
-                            100.0 * cover
-                        );
-                        if !self
-                            .warnings
-                            .iter()
-                            .any(|x| x.starts_with(&w[..w.find(" covers").unwrap_or(0)]))
-                        {
-                            self.warnings.push(w);
+                        let said = format!("view '{}': the segmenter's mask covers", p.name);
+                        if !self.warnings.iter().any(|w| w.starts_with(&said)) {
+                            self.warnings.push(format!(
+                                "{said} {:.0} % of the photograph, which says little of where the object is: draw \
+                                 a box close around the object",
+                                100.0 * cover
+                            ));
                         }
                     }
                     let sources = ViewSources::files("(made by the segmenter)", "ignore mask", "photograph");
